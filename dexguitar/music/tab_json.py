@@ -1,0 +1,225 @@
+"""The authors' JSON tab format (reader and writer).
+
+A file holds a list of tracks; a track is `{"tempo": BPM, "notes": [note, ...]}` and a note is
+`{"t": duration, "effects": {...}, "frets": [6 ints]}`:
+
+* `frets[0]` is string 1 (high E); -1 = string not played, 0 = open, k >= 1 = fret k (k <= 22).
+* `t` is a fraction of a whole note: `"a/b"` (a and b may be decimals: the authors write a triplet eighth as
+  `"0.3333333/8"`; such values are snapped to the nearest fraction with denominator <= 192, i.e. 1/24, and rejected
+  when that fraction is more than 1e-4 (relative) away), `"n"` (n whole notes) or a JSON number (whole notes).
+* `effects` (all optional, each a 6-vector indexed like `frets`):
+    - `"tied"`: 0/1 -> `Effect.TIE` (the string keeps sounding from the previous note);
+    - `"hammer/pull"`: 0/1 -> `Effect.HAMMER` when the string's fret is higher than in the previous note that
+      played that string, else `Effect.PULL` (also when no earlier note played it and the fret is 0);
+    - `"chords"`: frets of the left-hand chord hint (-1 = string not in the chord) -> `Note.chord`.
+  Unknown effect keys are rejected (a typo would otherwise silently change the song); an effect flag on a string
+  the note does not play is rejected too.
+
+Extension: a track may carry `"title"`; the writer always writes it so that titles survive a round trip; without
+it the reader uses the file name (without suffix) as the title.
+
+Writing: the format has no slide, so `Effect.SLIDE` is written as `"hammer/pull"` (a legato note sounded by the
+left hand) and reads back as HAMMER or PULL. Durations are written exactly as `"a/b"`; the tempo as an integer when
+it is whole. Effects on strings that do not sound are dropped. For every other song `read(write(song)) == song`
+(provided its HAMMER/PULL flags agree with the fret direction, which is how the reader decides between them).
+"""
+from __future__ import annotations
+
+import json
+import math
+from fractions import Fraction
+from pathlib import Path
+
+from dexguitar.music.song import MUTE, Effect, Note, Song, SongError
+from dexguitar.world.guitar import N_FRETS, N_STRINGS
+
+MAX_DENOMINATOR = 192   # decimal durations snap to a fraction with at most this denominator
+SNAP_TOLERANCE = 1e-4   # ... and must lie this close to it (relative), else the duration is rejected
+_KNOWN_EFFECTS = ("tied", "hammer/pull", "chords")
+
+
+def _is_int(x) -> bool:
+    return isinstance(x, int) and not isinstance(x, bool)
+
+
+def _is_number(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+
+def parse_duration(t) -> Fraction:
+    """`t` field -> exact fraction of a whole note. Raises ValueError with a short reason."""
+    if _is_int(t):
+        value = Fraction(t)
+    elif _is_number(t):
+        if not math.isfinite(t):
+            raise ValueError(f"'t' must be finite, got {t!r}")
+        value = _snap(Fraction(repr(t)), t)
+    elif isinstance(t, str):
+        text = t.strip()
+        num, sep, den = text.partition("/")
+        try:
+            a = Fraction(num.strip())
+            b = Fraction(den.strip()) if sep else Fraction(1)
+        except (ValueError, ZeroDivisionError):
+            raise ValueError(f"'t' must look like 'a/b', 'n' or a number, got {t!r}") from None
+        if b == 0:
+            raise ValueError(f"'t' has a zero denominator: {t!r}")
+        value = a / b
+        if value.denominator > 1 and (a.denominator > 1 or b.denominator > 1):  # decimals: snap
+            value = _snap(value, t)
+    else:
+        raise ValueError(f"'t' must be a string or a number, got {type(t).__name__}")
+    if value <= 0:
+        raise ValueError(f"'t' must be positive, got {t!r}")
+    return value
+
+
+def _snap(value: Fraction, shown) -> Fraction:
+    snapped = value.limit_denominator(MAX_DENOMINATOR)
+    if value == 0 or abs(snapped - value) > SNAP_TOLERANCE * abs(value):
+        raise ValueError(f"'t' = {shown!r} is not close to a fraction with denominator <= {MAX_DENOMINATOR}")
+    return snapped
+
+
+def _six(value, what: str, lo: int, hi: int) -> tuple[int, ...]:
+    if not isinstance(value, list) or len(value) != N_STRINGS or not all(_is_int(v) for v in value):
+        raise ValueError(f"'{what}' must be {N_STRINGS} integers, got {json.dumps(value)}")
+    for i, v in enumerate(value):
+        if not lo <= v <= hi:
+            raise ValueError(f"'{what}' string {i + 1}: {v} is outside {lo}..{hi}")
+    return tuple(value)
+
+
+def _flags(value, what: str) -> tuple[bool, ...]:
+    if (not isinstance(value, list) or len(value) != N_STRINGS
+            or not all(isinstance(v, (int, bool)) and v in (0, 1) for v in value)):
+        raise ValueError(f"'{what}' must be {N_STRINGS} values 0 or 1, got {json.dumps(value)}")
+    return tuple(bool(v) for v in value)
+
+
+def _parse_track(data, path, t: int) -> Song:
+    where = f"track {t}"
+    if not isinstance(data, dict):
+        raise SongError(path, where, f"a track must be an object with 'tempo' and 'notes', got {type(data).__name__}")
+    for key in ("tempo", "notes"):
+        if key not in data:
+            raise SongError(path, where, f"missing key '{key}'")
+    tempo = data["tempo"]
+    if not _is_number(tempo) or not math.isfinite(tempo) or tempo <= 0:
+        raise SongError(path, where, f"'tempo' must be a positive number of beats per minute, got {tempo!r}")
+    notes_in = data["notes"]
+    if not isinstance(notes_in, list):
+        raise SongError(path, where, "'notes' must be a list")
+    if not notes_in:
+        raise SongError(path, where, "'notes' is empty")
+    title = data.get("title", Path(path).stem if path is not None else "")
+    if not isinstance(title, str):
+        raise SongError(path, where, "'title' must be a string")
+
+    last_fret = [None] * N_STRINGS  # fret of the previous note that played each string
+    notes = []
+    for i, raw in enumerate(notes_in):
+        try:
+            note = _parse_note(raw, last_fret)
+        except ValueError as e:
+            raise SongError(path, f"{where}, note {i}", str(e)) from None
+        notes.append(note)
+        for s, f in enumerate(note.frets):
+            if f != MUTE:
+                last_fret[s] = f
+    return Song(tempo=tempo, notes=tuple(notes), title=title)
+
+
+def _parse_note(raw, last_fret) -> Note:
+    if not isinstance(raw, dict):
+        raise ValueError(f"a note must be an object, got {type(raw).__name__}")
+    for key in ("t", "frets"):
+        if key not in raw:
+            raise ValueError(f"missing key '{key}'")
+    duration = parse_duration(raw["t"])
+    frets = _six(raw["frets"], "frets", MUTE, N_FRETS)
+    effects_in = raw.get("effects", {})
+    if effects_in is None:
+        effects_in = {}
+    if not isinstance(effects_in, dict):
+        raise ValueError("'effects' must be an object")
+    unknown = sorted(set(effects_in) - set(_KNOWN_EFFECTS))
+    if unknown:
+        raise ValueError(f"unknown effect {unknown[0]!r}; known: {', '.join(_KNOWN_EFFECTS)}")
+    effects = [Effect.NONE] * N_STRINGS
+    for key in ("tied", "hammer/pull"):
+        if key not in effects_in:
+            continue
+        for s, on in enumerate(_flags(effects_in[key], key)):
+            if not on:
+                continue
+            if frets[s] == MUTE:
+                raise ValueError(f"'{key}' marks string {s + 1}, which the note does not play")
+            if key == "tied":
+                effects[s] |= Effect.TIE
+            else:
+                prev = last_fret[s] if last_fret[s] is not None else 0
+                effects[s] |= Effect.HAMMER if frets[s] > prev else Effect.PULL
+    chord = _six(effects_in["chords"], "chords", MUTE, N_FRETS) if "chords" in effects_in else None
+    return Note(duration, frets, tuple(effects), chord)
+
+
+def read_json_tab(path: str | Path, *, track: int = 0) -> Song:
+    """Read one track (index `track`, 0-based) of an authors' JSON tab file into a `Song`.
+
+    Errors raise `SongError` naming the file and the position ("line L, column C" for invalid JSON,
+    "track T, note N" with 0-based indices for bad content).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise SongError(path, None, f"cannot read file: {e}") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise SongError(path, f"line {e.lineno}, column {e.colno}", f"not valid JSON: {e.msg}") from None
+    if isinstance(data, dict):  # lenient: a single track object instead of a list of tracks
+        data = [data]
+    if not isinstance(data, list):
+        raise SongError(path, None, f"expected a list of tracks, got {type(data).__name__}")
+    if not data:
+        raise SongError(path, None, "the file holds no tracks")
+    if not _is_int(track) or not 0 <= track < len(data):
+        raise SongError(path, None, f"track {track!r} does not exist; the file has {len(data)} track(s) "
+                                    f"(0..{len(data) - 1})")
+    return _parse_track(data[track], path, track)
+
+
+def _duration_text(d: Fraction) -> str:
+    d = Fraction(d)
+    return f"{d.numerator}/{d.denominator}"
+
+
+def _note_json(note: Note) -> dict:
+    effects: dict[str, list[int]] = {}
+    sounding = [f != MUTE for f in note.frets]
+    tied = [int(bool(e & Effect.TIE) and on) for e, on in zip(note.effects, sounding)]
+    legato = [int(bool(e & (Effect.HAMMER | Effect.PULL | Effect.SLIDE)) and on)
+              for e, on in zip(note.effects, sounding)]
+    if any(tied):
+        effects["tied"] = tied
+    if any(legato):
+        effects["hammer/pull"] = legato
+    if note.chord is not None:
+        effects["chords"] = list(note.chord)
+    return {"t": _duration_text(note.duration), "effects": effects, "frets": list(note.frets)}
+
+
+def dumps_json_tab(song: Song) -> str:
+    """The JSON text `write_json_tab` writes: one track, one note per line (like the authors' files)."""
+    tempo = float(song.tempo)
+    tempo = int(tempo) if tempo.is_integer() else tempo
+    head = f'    {{\n        "tempo": {json.dumps(tempo)},\n        "title": {json.dumps(song.title)},\n'
+    lines = ",\n".join("            " + json.dumps(_note_json(n)) for n in song.notes)
+    return f'[\n{head}        "notes": [\n{lines}\n        ]\n    }}\n]\n'
+
+
+def write_json_tab(song: Song, path: str | Path) -> None:
+    """Write `song` as a one-track JSON tab file (see the module docstring for the mapping)."""
+    Path(path).write_text(dumps_json_tab(song), encoding="utf-8")
