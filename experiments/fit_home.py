@@ -19,6 +19,13 @@ def body(m, d, name):
     return d.xpos[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, name)]
 
 
+def gap(a0, a1, b0, b1):
+    """Approximate closest distance between two segments (sampled), enough for a pose fit."""
+    t = np.linspace(0, 1, 12)[:, None]
+    pa, pb = a0 + t * (a1 - a0), b0 + t * (b1 - b0)
+    return np.sqrt(((pa[:, None] - pb[None]) ** 2).sum(-1)).min()
+
+
 def fit(role, guess, residual_terms):
     m = S.build_model(role)
     d = mujoco.MjData(m)
@@ -58,9 +65,12 @@ def right_terms(site_g, body_g, q):
     out = []
     pick = np.array([0.0, -0.33, G.string_z + 0.008])   # above strings 3/4 over the soundhole
     out.append(10 * (site_g("pick") - pick))
-    out.append(10 * (site_g("thumb_tip") - (pick + [0.0, 0.0, 0.012])))  # thumb pad on the pick
+    out.append(3 * (site_g("thumb_tip") - (pick + [0.0, 0.0, 0.012])))  # thumb pad near the pick
     for f in ("middle", "ring", "pinky"):              # curled fingers clear of the strings
         out.append(10 * np.array([max(0.0, G.string_z + 0.02 - site_g(f + "_tip")[2])]))
+    thumb = (body_g("thumb3"), site_g("thumb_tip"))    # thumb and index capsules touch, not overlap
+    for a, b in ((body_g("index2"), body_g("index3")), (body_g("index3"), site_g("index_tip"))):
+        out.append(20 * np.array([max(0.0, 0.0135 - gap(*thumb, a, b))]))
     for b in H.KEY_LINKS:                              # the whole hand above the guitar top, wrist well above
         clearance = 0.06 if b == "wrist" else 0.015
         out.append(10 * np.array([max(0.0, G.string_z + clearance - body_g(b)[2])]))

@@ -40,8 +40,9 @@ HOME = {
     "left": np.array([0.0907, -0.0181, -0.014, -0.1298, 1.0632, -2.0536, 0.6452, -0.9723, 0.7358, 0.6063, 0.4211,
                       0.4382, -0.0543, 0.7912, 0.4892, 0.4323, -0.0521, 1.1287, 0.7207, 0.5472, -0.0616, 1.139,
                       0.7008, 0.7445, -0.0504, 0.9171, 0.5233]),
-    "right": np.array([-0.108, -0.3103, 0.0844, -1.5336, -0.2866, 1.7515, 0.4153, 0.853, -0.8195, -0.7401, -0.494,
-                       0.3317, 0.0805, 1.2269, 0.6, 1.0, 0.0, 1.2, 0.8, 1.0, 0.0, 1.2, 0.8, 1.0, 0.0, 1.2, 0.8]),
+    "right": np.array([-0.0901, -0.3676, 0.1088, 0.9753, 0.2929, 0.8035, 0.2555, 0.7521, -0.6857, -0.7051, -0.5201,
+                       0.3092, -0.0329, 1.111, 0.5383, 1.0, 0.0, 1.2, 0.8, 1.0213, 0.0285, 1.2044, 0.8, 1.0198, 0.0218,
+                       1.2072, 0.8]),
 }
 
 
@@ -208,3 +209,22 @@ def write_models(directory=H.MODELS_DIR) -> list:
         path.write_text(build_spec(name).to_xml())
         paths.append(path)
     return paths
+
+
+def to_guitar_frame(model: mujoco.MjModel):
+    """A function mapping world points (..., 3) to the guitar frame: p_g = R^T (p - p_0). Works on numpy and jax."""
+    pos, rot = guitar_pose(model)
+
+    def apply(p):
+        return (p - pos) @ rot
+    return apply
+
+
+def finger_segments(xpos, site_xpos, hand: HandIndex):
+    """(12, 2, 3) axis segments MCP->PIP, PIP->DIP, DIP->tip of index..pinky, in the frame of `xpos`."""
+    starts, ends = [], []
+    for (b1, b2, b3), tip in zip(hand.segments, hand.tips):
+        starts += [xpos[b1], xpos[b2], xpos[b3]]
+        ends += [xpos[b2], xpos[b3], site_xpos[tip]]
+    stack = np.stack if isinstance(xpos, np.ndarray) else __import__("jax.numpy").numpy.stack
+    return stack([stack(starts), stack(ends)], axis=1)

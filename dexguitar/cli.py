@@ -1,0 +1,150 @@
+"""The `dexguitar` command. The Makefile only calls this.
+
+  dexguitar song list                      embedded songs
+  dexguitar song info FILE|NAME... [--json] tempo, notes, chords, seconds, frames, frets
+  dexguitar song convert IN OUT.json       write the authors' JSON tab format
+  dexguitar check                          the main job until trained policies ship: songs + every scene steps
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+
+def song_summary(song) -> dict:
+    from dexguitar.music import timeline
+    tl = timeline.from_song(song)
+    frets = song.frets_used
+    return {
+        "title": song.title,
+        "tempo": song.tempo,
+        "effective_tempo": round(float(tl.tempo), 3),
+        "notes": song.n_notes,
+        "chords": song.n_chords,
+        "rests": len(song.notes) - song.n_notes,
+        "seconds": round(song.seconds, 3),
+        "frames": int(tl.n_frames),
+        "frets": list(frets) if frets else None,
+    }
+
+
+def _song_info(args) -> int:
+    from dexguitar.music import load_song
+    rows = []
+    for source in args.files:
+        song = load_song(source)
+        rows.append({"file": str(source), **song_summary(song)})
+    if args.json:
+        print(json.dumps(rows[0] if len(rows) == 1 else rows, indent=2))
+        return 0
+    print(f"{'file':40s} {'tempo':>6s} {'notes':>6s} {'chords':>6s} {'seconds':>8s} {'frames':>7s}  frets")
+    for r in rows:
+        name = Path(r["file"]).name if Path(r["file"]).exists() else r["file"]
+        frets = "-" if r["frets"] is None else f"{r['frets'][0]}-{r['frets'][1]}"
+        print(f"{name[-40:]:40s} {r['tempo']:6g} {r['notes']:6d} {r['chords']:6d} {r['seconds']:8.2f} "
+              f"{r['frames']:7d}  {frets}")
+    return 0
+
+
+def _song_list(args) -> int:
+    from dexguitar.music import library
+    args.files, args.json = library.names(), getattr(args, "json", False)
+    return _song_info(args)
+
+
+def _song_convert(args) -> int:
+    from dexguitar.music import load_song
+    from dexguitar.music.tab_json import write_json_tab
+    song = load_song(args.source)
+    write_json_tab(song, args.out)
+    print(f"wrote {args.out}: {song.n_notes} notes, {song.n_chords} chords, {song.seconds:.1f} s")
+    return 0
+
+
+def _check(args) -> int:
+    """Print the embedded songs, then step every scene (4 envs, jit + vmap, MJX) and report the speed."""
+    import jax
+    import jax.numpy as jnp
+    import mujoco
+    import numpy as np
+    from mujoco import mjx
+
+    from dexguitar.world import scene as S
+
+    print("Embedded songs:")
+    _song_list(argparse.Namespace(json=False))
+    print(f"\nScenes ({args.envs} envs, {S.SUBSTEPS} physics steps per control step, JAX on {jax.default_backend()}):")
+    for name in S.SCENES:
+        for mirror in ((False, True) if args.mirrored else (False,)):
+            m = S.build_model(name, mirror=mirror)
+            mx = mjx.put_model(m)
+            d = mujoco.MjData(m)
+            mujoco.mj_resetDataKeyframe(m, d, 0)
+            batch = jax.tree.map(lambda x: jnp.stack([x] * args.envs), mjx.put_data(m, d))
+            ctrl = jnp.broadcast_to(jnp.asarray(m.key_qpos[0]), (args.envs, m.nu))
+
+            @jax.jit
+            def rollout(data):
+                def control_step(data, _):
+                    data = data.replace(ctrl=ctrl)
+                    data = jax.vmap(lambda x: jax.lax.fori_loop(0, S.SUBSTEPS, lambda _, y: mjx.step(mx, y), x))(data)
+                    return data, None
+                return jax.lax.scan(control_step, data, None, length=args.steps)[0]
+
+            t0 = time.perf_counter()
+            out = jax.block_until_ready(rollout(batch))
+            compile_s = time.perf_counter() - t0
+            t0 = time.perf_counter()
+            out = jax.block_until_ready(rollout(out))
+            run_s = time.perf_counter() - t0
+            ok = bool(np.all(np.isfinite(np.asarray(out.qpos))))
+            label = name + (" (mirrored)" if mirror else "")
+            print(f"  {label:18s} {m.nq:3d} DoF  compile {compile_s:5.1f} s  "
+                  f"{args.envs * args.steps / run_s:9.0f} control steps/s  {'ok' if ok else 'NOT FINITE'}")
+            if not ok:
+                return 1
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="dexguitar", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    song = sub.add_parser("song", help="read, inspect and convert tabs").add_subparsers(dest="song_command",
+                                                                                       required=True)
+    p = song.add_parser("info", help="tempo, notes, chords, duration, frets of tab files or embedded songs")
+    p.add_argument("files", nargs="+", help="tab files (.json .txt .tab .gp3/4/5 .mid) or embedded song names")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=_song_info)
+    p = song.add_parser("list", help="the embedded songs")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=_song_list)
+    p = song.add_parser("convert", help="convert any tab to the authors' JSON tab format")
+    p.add_argument("source")
+    p.add_argument("out")
+    p.set_defaults(func=_song_convert)
+
+    p = sub.add_parser("check", help="print the embedded songs and check that every scene steps in MJX")
+    p.add_argument("--envs", type=int, default=4)
+    p.add_argument("--steps", type=int, default=60, help="control steps per timed rollout")
+    p.add_argument("--mirrored", action="store_true", help="also the left-handed player's scenes")
+    p.set_defaults(func=_check)
+    return parser
+
+
+def main(argv=None) -> int:
+    from dexguitar.music.song import SongError
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except SongError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,87 @@
+"""Per-note precision, recall and F1 exactly as the paper defines them (Sec. 6.1), as streaming tallies.
+
+A note is judged string by string. True positives:
+- left hand: a target string (goal fret k > 0) pressed at fret k *continuously* for at least 2/3 of the note;
+  predicted = non-mute strings pressed (any fret) continuously for at least 2/3 of the note;
+- right hand: a target string picked once and only once, in a consistent order (no error flagged on it);
+  predicted = strings picked at all during the note;
+- both hands: picked correctly, pressed correctly (open strings: not pressed) at the moment of the pick, and kept so
+  continuously for at least 2/3 of the note after the pick; predicted and targets as for the right hand.
+precision = TP / predicted and recall = TP / targets, with 0/0 = 1 (a rest played as a rest is perfect).
+
+The env updates a `NoteTally` every control step and closes it at the end of each note; offline evaluation replays
+recorded press/pick arrays through the same two functions, so training curves and reports cannot disagree.
+"""
+from __future__ import annotations
+
+import jax.numpy as jnp
+from flax import struct
+
+N_STRINGS = 6
+
+
+@struct.dataclass
+class NoteTally:
+    run_ok: jnp.ndarray     # int32 (6,): current run of frames pressed at the target fret (left)
+    best_ok: jnp.ndarray    # int32 (6,): longest such run in this note
+    run_on: jnp.ndarray     # int32 (6,): current run of frames pressed at any fret
+    best_on: jnp.ndarray    # int32 (6,)
+    picks: jnp.ndarray      # int32 (6,): crossings of each string during this note
+    errors: jnp.ndarray     # bool (6,): string tackled wrongly (not a target, repeated, out of order, not ready)
+    held: jnp.ndarray       # int32 (6,): frames pressed correctly since the first pick, while unbroken; -1 = no pick
+    held_best: jnp.ndarray  # int32 (6,): longest run of correct pressing that started with a correct pick
+    press_at_pick: jnp.ndarray  # bool (6,): the string was pressed correctly when it was picked
+
+
+def empty_tally() -> NoteTally:
+    z = jnp.zeros(N_STRINGS, jnp.int32)
+    f = jnp.zeros(N_STRINGS, bool)
+    return NoteTally(z, z, z, z, z, f, z - 1, z, f)
+
+
+def left_ok(press, goal):
+    """Per string: is it in its expected state? press = detected fret (0 none); goal: k>0 press k, -1 open, 0 mute."""
+    return jnp.where(goal > 0, press == goal, jnp.where(goal < 0, press == 0, True))
+
+
+def update(tally: NoteTally, press, goal, picked=None, errors=None) -> NoteTally:
+    """One control step. press: int (6,) detected frets; goal: int (6,) left goal of the note;
+    picked: bool (6,) strings crossed by the pick this step; errors: bool (6,) strings tackled wrongly this step."""
+    ok = (goal > 0) & (press == goal)
+    run_ok = jnp.where(ok, tally.run_ok + 1, 0)
+    on = press > 0
+    run_on = jnp.where(on, tally.run_on + 1, 0)
+    tally = tally.replace(run_ok=run_ok, best_ok=jnp.maximum(tally.best_ok, run_ok),
+                          run_on=run_on, best_on=jnp.maximum(tally.best_on, run_on))
+    if picked is None:
+        return tally
+    errors = jnp.zeros(N_STRINGS, bool) if errors is None else errors
+    state_ok = left_ok(press, goal)
+    first = picked & (tally.picks == 0)
+    held = jnp.where(first, jnp.where(state_ok, 1, 0),
+                     jnp.where((tally.held > 0) & state_ok, tally.held + 1, jnp.where(tally.held > 0, 0, tally.held)))
+    return tally.replace(picks=tally.picks + picked.astype(jnp.int32), errors=tally.errors | errors,
+                         held=held, held_best=jnp.maximum(tally.held_best, held),
+                         press_at_pick=tally.press_at_pick | (first & state_ok))
+
+
+def _prf(tp, predicted, targets):
+    tp, predicted, targets = (jnp.sum(x.astype(jnp.float32)) for x in (tp, predicted, targets))
+    precision = jnp.where(predicted > 0, tp / jnp.maximum(predicted, 1.0), 1.0)
+    recall = jnp.where(targets > 0, tp / jnp.maximum(targets, 1.0), 1.0)
+    f1 = jnp.where(precision + recall > 0, 2 * precision * recall / jnp.maximum(precision + recall, 1e-9), 0.0)
+    return jnp.stack([precision, recall, f1, tp, predicted, targets])
+
+
+def close(tally: NoteTally, frames, goal, targets=None):
+    """End of a note of `frames` frames. Returns a dict hand -> [precision, recall, f1, tp, predicted, targets]
+    (float32 (6,)) for "left" and, when picks were tallied (targets = the note's pick targets), "right" and "both"."""
+    need = 2 * frames                              # "at least 2/3 of the note": 3 * run >= 2 * frames
+    out = {"left": _prf((goal > 0) & (3 * tally.best_ok >= need), (goal != 0) & (3 * tally.best_on >= need),
+                        goal > 0)}
+    if targets is not None:
+        right_tp = targets & (tally.picks == 1) & ~tally.errors
+        picked = tally.picks > 0
+        out["right"] = _prf(right_tp, picked, targets)
+        out["both"] = _prf(right_tp & tally.press_at_pick & (3 * tally.held_best >= need), picked, targets)
+    return out
