@@ -1,0 +1,142 @@
+"""Rewards of the paper as pure functions of guitar-frame geometry (Sec. 5, Eq. 3-16).
+
+Every constant is written beside its equation. Where the authors' code and the paper differ (reference §12) we
+follow the paper, except where the difference is needed to learn; those places say so.
+"""
+from __future__ import annotations
+
+import jax.numpy as jnp
+
+from dexguitar.world import detect
+from dexguitar.world.guitar import GUITAR, Guitar
+
+N_STRINGS, N_FINGERS = 6, 4
+SIN_5_DEG = 0.0871557         # lie-flat test: a proximal or middle part may press if it is within 5 deg of the board
+OPEN_DISTANCE = 0.007         # Eq. 5 normalization (finger radius ~6 mm)
+PICK_CLEARANCE = 0.003        # Eq. 13: the pick rests at least 3 mm from every string
+
+
+# ----------------------------------------------------------------------------------------------- left hand
+
+def lie_flat(segments):
+    """bool (12,): which finger parts may press. The tip part always may; the others only when they lie within 5 deg
+    of the fretboard plane (paper Sec. 5.1: |angle| < 5 deg; the authors' code tests one side only)."""
+    d = segments[:, 1] - segments[:, 0]
+    sin = jnp.abs(d[:, 2]) / jnp.maximum(jnp.linalg.norm(d, axis=-1), 1e-9)
+    tip = (jnp.arange(segments.shape[0]) % 3) == 2
+    return tip | (sin < SIN_5_DEG)
+
+
+def finger_order(goal):
+    """bool (6, 4): fingers (index..pinky) allowed to press each target string (Fig. 4, reference §5.1).
+
+    Target strings at one fret form a group unless a string between them is open or pressed at a lower fret. Groups
+    are ranked by fret (at one fret, the group nearer string 6 first). With G groups, the group of rank r may use
+    fingers r .. r + 4 - G: fingers never cross and each presses one fret; more than 4 groups leaves none.
+    """
+    g = goal
+    target = g > 0
+    i = jnp.arange(N_STRINGS)
+    lo, hi = jnp.minimum(i[:, None], i[None, :]), jnp.maximum(i[:, None], i[None, :])
+    between = (i[None, None, :] > lo[:, :, None]) & (i[None, None, :] < hi[:, :, None])       # [a, b, m]
+    blocker = (g[None, :] == -1) | ((g[None, :] > 0) & (g[None, :] < g[:, None]))           # [a, m]
+    blocked = jnp.any(between & blocker[:, None, :], axis=-1)                                 # [a, b]
+    same = target[:, None] & (g[:, None] == g[None, :]) & ~blocked                           # includes a == b
+    rep = jnp.max(jnp.where(same, i[None, :], -1), axis=1)                  # group id: its string nearest string 6
+    is_rep = target & (rep == i)
+    n_groups = jnp.sum(is_rep)
+    key = g * 8 + (N_STRINGS - 1 - i)                                       # fret first, then nearer string 6
+    rank = jnp.sum(is_rep[None, :] & (key[None, :] < key[rep][:, None]), axis=1)
+    f = jnp.arange(N_FINGERS)
+    ok = (f[None, :] >= rank[:, None]) & (f[None, :] <= rank[:, None] + N_FINGERS - n_groups)
+    return target[:, None] & ok & (n_groups <= N_FINGERS)
+
+
+def left_reward(segments, goal, press, energy, guitar: Guitar = GUITAR):
+    """Columns (6,) of Eq. 7 for one control step, plus r_correct.
+
+    segments: (12, 2, 3) finger parts index..pinky (guitar frame); goal: int (6,) k>0 press fret k, -1 open, 0 mute;
+    press: int (6,) detected frets; energy: Eq. 8 value in [0, 1].
+    """
+    targets = jnp.asarray(guitar.target_points, jnp.float32)[jnp.arange(N_STRINGS), jnp.clip(goal, 0, None)]
+    d2, _ = detect.point_segment_distance(targets[:, None, :], segments[None, :, 0], segments[None, :, 1])  # (6, 12)
+    usable = finger_order(goal)[:, jnp.arange(12) // 3] & lie_flat(segments)[None, :]
+    d2 = jnp.min(jnp.where(usable, d2, jnp.inf), axis=1)
+    r_press = 0.8 * jnp.exp(-1000.0 * d2) + 0.2 * jnp.exp(-30.0 * d2)                  # Eq. 4
+    r_open = jnp.minimum((detect.string_distances(segments, guitar) / OPEN_DISTANCE) ** 2, 1.0)  # Eq. 5 (code: ^4)
+    r_mute = 0.9 + 0.1 * r_open                                                          # Eq. 6
+    r_string = jnp.where(goal > 0, r_press, jnp.where(goal < 0, r_open, r_mute))        # Eq. 3
+    ok = jnp.where(goal > 0, press == goal, jnp.where(goal < 0, press == 0, True))
+    r_correct = jnp.all(ok).astype(jnp.float32)
+    # Eq. 7. The paper writes "- 0.05 r_energy", which would reward motion since r_energy = 1 when still; the
+    # authors' code adds it, which is what makes it an energy term (needed to learn).
+    return 0.8 * r_string + 0.2 * r_correct + 0.05 * energy, r_correct
+
+
+def hand_energy(wrist_velocity, tip_velocities):
+    """Eq. 8: exp(-(|v_w| + 0.1 sum_f |v_f|)^2); fingertip velocities relative to the wrist, in its frame."""
+    speed = jnp.linalg.norm(wrist_velocity) + 0.1 * jnp.sum(jnp.linalg.norm(tip_velocities, axis=-1))
+    return jnp.exp(-speed ** 2)
+
+
+# ----------------------------------------------------------------------------------------------- right hand
+
+def r_distance(d):
+    """Eq. 12: shaped by the pick's distance to a string, sensitive from millimetres to decimetres."""
+    return 0.175 * jnp.exp(-1e4 * d ** 2) + 0.025 * jnp.exp(-2e3 * d ** 2)
+
+
+def pick_distances(pick, guitar: Guitar = GUITAR):
+    """(6,) distance from the pick point to every string."""
+    s = jnp.asarray(guitar.strings, jnp.float32)
+    d2, _ = detect.point_segment_distance(pick[None, :], s[:, 0], s[:, 1])
+    return jnp.sqrt(d2)
+
+
+def pick_update(p_prev, p_now, targets, done, ok, ready, depth, guitar: Guitar = GUITAR):
+    """Picking bookkeeping of one control step (Sec. 5.2).
+
+    targets: strings to pick in this note; done: already picked (or skipped); ok: no error so far in the note;
+    ready: duet gate (all True for the right hand alone). A string is tackled wrongly when it is picked but was not
+    a ready target still to pick (a non-target, a repeat, or too shallow: `depth` below the string, training only),
+    or when it is a remaining target that the pick swept past while picking others (consistent order).
+    Returns picked, wrong, done, ok.
+    """
+    crossed = detect.pick_crossings(p_prev, p_now, guitar, 0.0).picked
+    valid = detect.pick_crossings(p_prev, p_now, guitar, depth).picked
+    correct = valid & targets & ~done & ready
+    wrong = crossed & ~correct
+    sweep = jnp.sign((p_now[0] - p_prev[0]) * guitar.sign)                 # +1 toward string 1 (down)
+    x_at = guitar.sign * jnp.asarray(_string_x(guitar, p_now[1]))
+    behind = (x_at - guitar.sign * p_now[0]) * sweep < 0                    # the pick has moved past the string
+    skipped = targets & ~done & ~crossed & behind & jnp.any(crossed) & (sweep != 0)
+    return crossed, wrong | skipped, done | correct | skipped | (crossed & targets), ok & ~wrong & ~skipped
+
+
+def _string_x(guitar: Guitar, y):
+    s = jnp.asarray(guitar.strings, jnp.float32)
+    t = (y - s[:, 0, 1]) / (s[:, 1, 1] - s[:, 0, 1])
+    return s[:, 0, 0] + t * (s[:, 1, 0] - s[:, 0, 0])
+
+
+def pick_reward(picked, wrong, targets, done, ok, ready, distances):
+    """r_pick of Eq. 10 given the state after this step's `pick_update`."""
+    r_plus = jnp.where(jnp.any(wrong), jnp.min(jnp.where(wrong, r_distance(distances), 1.0)), 1.0)   # Eq. 11
+    remaining = targets & ~done & ready
+    idx = jnp.arange(N_STRINGS)
+    top = jnp.min(jnp.where(remaining, idx, N_STRINGS - 1))
+    bottom = jnp.max(jnp.where(remaining, idx, 0))
+    # Eq. 14 writes min over top and bottom, its prose "the nearest top or bottom-most target"; max is the prose
+    # (and the authors' code): reward approaching either end of the strum.
+    r_cross = 0.2 + 2.0 * jnp.maximum(r_distance(distances[top]), r_distance(distances[bottom]))
+    clean = ok & (done | ~targets)                          # r_i of Eq. 13: picked correctly / left alone
+    r_minus = (0.4 * jnp.minimum(jnp.min(distances) / PICK_CLEARANCE, 1.0)
+               + 0.1 * jnp.sum(clean) + 0.5 * jnp.all(clean))                           # Eq. 13
+    # A not-ready target (duet) counts as no target: the r- case of Eq. 10.
+    return jnp.where(jnp.any(picked), r_plus, jnp.where(jnp.any(remaining), r_cross, r_minus))
+
+
+def pick_energy(v_pick, a_pick):
+    """Eq. 16: exp(-20 |v|^2) - 14 |0.05 a|^4. The acceleration term is capped at 1 (as in the authors' code):
+    unbounded it reaches -400 for a 100 m/s^2 flick and swamps every other reward (needed to learn)."""
+    return jnp.exp(-20.0 * jnp.sum(v_pick ** 2)) - 14.0 * jnp.minimum(jnp.sum((0.05 * a_pick) ** 2) ** 2, 1.0)

@@ -1,0 +1,208 @@
+import re
+from fractions import Fraction
+
+import pytest
+
+from dexguitar.music.procedural import (CHORD_SHAPES, SHAPES_BY_NAME, chord_positions, coverage, left_exercises,
+                                        right_patterns, scale_positions, scale_run, shape_name)
+from dexguitar.music.song import Effect, Song
+from dexguitar.world.guitar import GUITAR
+
+MUTE = -1
+MAJOR = (0, 2, 4, 5, 7, 9, 11)
+BUCKETS = ((1, 5), (6, 10), (11, 15), (16, 22))
+
+
+@pytest.fixture(scope="module")
+def left():
+    return left_exercises(7, 200)
+
+
+@pytest.fixture(scope="module")
+def right():
+    return right_patterns(7, 200)
+
+
+def pressed_ok(frets):
+    """Independent playability check of one hand shape."""
+    assert len(frets) == 6
+    assert all(-1 <= f <= 22 for f in frets), frets
+    pressed = [f for f in frets if f >= 1]
+    if pressed:
+        assert max(pressed) - min(pressed) <= 3, frets
+        assert len(set(pressed)) <= 4, frets
+
+
+def bucket(fret):
+    return next(i for i, (lo, hi) in enumerate(BUCKETS) if lo <= fret <= hi)
+
+
+def test_deterministic_per_seed():
+    assert left_exercises(3, 12) == left_exercises(3, 12)
+    assert right_patterns(3, 12) == right_patterns(3, 12)
+    assert left_exercises(3, 12) != left_exercises(4, 12)
+    assert right_patterns(3, 12) != right_patterns(4, 12)
+    assert left_exercises(3, 12)[:5] == left_exercises(3, 5)  # a longer call extends a shorter one
+
+
+def test_songs_are_well_formed(left, right):
+    for songs, (lo, hi), prefix in ((left, (60, 160), "left-exercise-"), (right, (60, 180), "right-pattern-")):
+        assert len(songs) == 200
+        for i, song in enumerate(songs):
+            assert isinstance(song, Song) and len(song.notes) == 40
+            assert lo <= song.tempo <= hi
+            assert song.title.startswith(f"{prefix}{i} (")
+            for note in song.notes:
+                assert isinstance(note.duration, Fraction) and note.duration > 0
+    kinds = {s.title.split("(")[1].split()[0].rstrip(")") for s in left}
+    assert kinds == {"scale", "arpeggio", "chords", "jumps"}
+    assert any(n.is_rest for s in left for n in s.notes)
+    assert any(a == b and not a.is_rest for s in left for a, b in zip(s.notes, s.notes[1:]))
+
+
+def test_every_note_is_playable(left, right):
+    for song in left + right:
+        for note in song.notes:
+            pressed_ok(note.frets)
+            if note.chord is not None:
+                pressed_ok(note.chord)
+                for f, c in zip(note.frets, note.chord):
+                    if f != MUTE:
+                        assert c == f, (note.frets, note.chord)
+
+
+def test_right_hand_is_open_strings_without_effects(right):
+    for song in right:
+        for note in song.notes:
+            assert set(note.frets) <= {MUTE, 0} and not note.is_rest
+            assert all(e == Effect.NONE for e in note.effects)
+
+
+def test_vocabulary():
+    assert len(CHORD_SHAPES) >= 40
+    names = [s.name for s in CHORD_SHAPES]
+    assert len(set(names)) == len(names)
+    for s in CHORD_SHAPES:
+        positions = chord_positions(s)
+        assert positions and len(set(positions)) == len(positions)
+        assert len(positions) == (1 if not s.movable else 22 - max(f for f in s.frets if f >= 0))
+        for p in positions:
+            pressed_ok(p)
+            assert shape_name(p) == s.name
+            if s.movable:
+                assert 0 not in p and min(f for f in p if f > 0) >= 1
+    # A barre: >= 3 strings at the lowest fret, strings 1 and 6 among them.
+    barres = [s for s in CHORD_SHAPES if s.movable and s.frets[0] == s.frets[5] == 0
+              and sum(f == 0 for f in s.frets) >= 3]
+    assert barres
+    power = [s for s in CHORD_SHAPES if "power" in s.name]
+    assert {len(s.strings) for s in power} == {2, 3}
+    assert {max(s.strings) for s in power} == {4, 5, 6}
+    for name in ("open C", "open G", "open D", "open A", "open Am", "open Em", "open Dm", "open E"):
+        assert chord_positions(name) == [SHAPES_BY_NAME[name].frets]
+
+
+def test_e_shape_positions():
+    pos = chord_positions("E-shape major")
+    assert pos[0] == (1, 1, 2, 3, 3, 1)   # F major
+    assert pos[2] == (3, 3, 4, 5, 5, 3)   # G major
+    pitch = GUITAR.pitch_table
+    g = {int(pitch[s, f]) % 12 for s, f in enumerate(pos[2])}
+    assert g == {7, 11, 2}  # G B D
+
+
+def test_triads_sound_their_triads():
+    pitch = GUITAR.pitch_table
+    for s in CHORD_SHAPES:
+        if s.name.startswith("triad"):
+            p = chord_positions(s)[4]
+            pitches = sorted(int(pitch[i, f]) for i, f in enumerate(p) if f != MUTE)
+            third = 4 if "major" in s.name else 3
+            assert [x - pitches[0] for x in pitches] == [0, third, 7], s.name
+
+
+def test_major_scale_pitches(left):
+    pitch = GUITAR.pitch_table
+    names = ("C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B")
+    majors = [s for s in left if re.search(r"\(scale \S+ major\)", s.title)]
+    assert majors
+    for song in majors:
+        root = names.index(song.title.split()[2])
+        played = [n for n in song.notes if not n.is_rest]
+        pcs = set()
+        for note in played:
+            (string,) = note.played
+            pcs.add(int(pitch[string - 1, note.frets[string - 1]] - root) % 12)
+        assert pcs == set(MAJOR), song.title
+        # Steps within a run move by a scale step (1 or 2 semitones) or restart in a new box.
+        steps = [abs(b.pitches[0] - a.pitches[0]) for a, b in zip(played, played[1:])]
+        assert sum(s in (0, 1, 2) for s in steps) >= 0.8 * len(steps)
+
+
+def test_scale_runs_step_through_the_scale():
+    pitch = GUITAR.pitch_table
+    for root in range(12):
+        starts = scale_positions(root, "major")
+        assert min(starts) <= 5 and max(starts) >= 16  # the whole neck
+        for start in starts:
+            run = scale_run(start, root, "major")
+            assert len(run) >= 7
+            assert all(start <= f <= start + 3 for _, f in run)
+            p = [int(pitch[s - 1, f]) for s, f in run]
+            assert all(b - a in (1, 2) for a, b in zip(p, p[1:]))
+            assert all((q - root) % 12 in MAJOR for q in p)
+
+
+def test_arpeggio_notes_carry_chord_hint(left):
+    arps = [s for s in left if s.title.endswith("(arpeggio)")]
+    assert arps
+    for song in arps:
+        for note in song.notes:
+            if not note.is_rest:
+                assert note.chord is not None and len(note.played) == 1
+                assert shape_name(note.chord) is not None
+
+
+def test_balanced_chord_shapes_across_neck(left):
+    seen = {s.name: set() for s in CHORD_SHAPES}
+    for song in left:
+        for note in song.notes:
+            hand = note.chord if note.chord is not None else note.frets
+            name = shape_name(hand)
+            if name is not None:
+                seen[name].add(bucket(min(f for f in hand if f > 0)))
+    for s in CHORD_SHAPES:
+        reachable = {bucket(min(f for f in p if f > 0)) for p in chord_positions(s)}
+        assert len(seen[s.name]) >= min(3, len(reachable)), (s.name, seen[s.name])
+
+
+def test_balanced_string_sets(right):
+    counts = {}
+    for song in right:
+        for note in song.notes:
+            strings = note.played
+            assert list(strings) == list(range(strings[0], strings[-1] + 1))  # contiguous
+            counts[strings] = counts.get(strings, 0) + 1
+    assert len(counts) == 21
+    assert max(counts.values()) < 2 * min(counts.values())
+    cov = coverage(right)
+    assert cov["string_sets"]["other"] == 0
+    assert sorted(v for k, v in cov["string_sets"].items() if k != "other") == sorted(counts.values())
+
+
+def test_runs_go_up_and_down(right):
+    def runs(song, step):
+        lows = [n.played[0] if len(n.played) == 1 else None for n in song.notes]
+        return any(a is not None and b == a + step and c == a + 2 * step
+                   for a, b, c in zip(lows, lows[1:], lows[2:]))
+    assert any(runs(s, -1) for s in right)  # e.g. 6-5-4: ascending in pitch
+    assert any(runs(s, +1) for s in right)  # e.g. 4-5-6: descending in pitch
+
+
+def test_coverage_summary(left, right):
+    cov = coverage(left)
+    assert cov["songs"] == 200 and cov["notes"] + cov["rests"] == 200 * 40
+    assert 0 < cov["chord_fraction"] < 1
+    assert all(cov["positions"][k] > 0 for k in ("1-5", "6-10", "11-15", "16-22"))
+    assert all(v > 0 for v in cov["shapes"].values())
+    assert coverage(right)["chord_fraction"] > 0.5
