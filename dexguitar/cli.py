@@ -3,6 +3,7 @@
   dexguitar song list                      embedded songs
   dexguitar song info FILE|NAME... [--json] tempo, notes, chords, seconds, frames, frets
   dexguitar song convert IN OUT.json       write the authors' JSON tab format
+  dexguitar bench env --hand left --envs N  env throughput (control and physics steps/s)
   dexguitar check                          the main job until trained policies ship: songs + every scene steps
 """
 from __future__ import annotations
@@ -109,6 +110,24 @@ def _check(args) -> int:
     return 0
 
 
+def _bench_env(args) -> int:
+    from dexguitar.envs.bench import bench_env
+    rows = []
+    for hand in args.hand:
+        for n in args.envs:
+            for bare in ((False, True) if args.bare else (False,)):
+                r = bench_env(hand, n, args.steps, bare=bare)
+                rows.append(r)
+                label = hand + (" (physics only)" if bare else "")
+                print(f"{label:22s} envs {n:6d}  compile {r['compile_s']:6.1f} s  "
+                      f"{r['control_steps_per_s']:11,.0f} control steps/s  {r['physics_steps_per_s']:12,.0f} "
+                      f"physics steps/s  [{r['device']}]", flush=True)
+    if args.json:
+        import json
+        Path(args.json).write_text(json.dumps(rows, indent=2))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="dexguitar", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -127,6 +146,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("source")
     p.add_argument("out")
     p.set_defaults(func=_song_convert)
+
+    bench = sub.add_parser("bench", help="throughput benchmarks").add_subparsers(dest="bench_command",
+                                                                               required=True)
+    p = bench.add_parser("env", help="control and physics steps per second of an env (compile time apart)")
+    p.add_argument("--hand", nargs="+", default=["left"], choices=["left", "right", "duet"])
+    p.add_argument("--envs", nargs="+", type=int, default=[4])
+    p.add_argument("--steps", type=int, default=100, help="control steps per timed rollout")
+    p.add_argument("--bare", action="store_true", help="also time the MJX physics alone")
+    p.add_argument("--json", help="write the results to this file")
+    p.set_defaults(func=_bench_env)
 
     p = sub.add_parser("check", help="print the embedded songs and check that every scene steps in MJX")
     p.add_argument("--envs", type=int, default=4)

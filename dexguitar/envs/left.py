@@ -12,4 +12,5 @@ class LeftEnv(GuitarEnv):
         return self.left_goal(state.window, state.note, state.note_frame)
 
     def task(self, state, data, links, goal_left, targets):
-        return self.left_part(state, data, links, goal_left)
+        out = self.left_part(state, data, links, goal_left)
+        return dict(out, tips=out["tips"][None])

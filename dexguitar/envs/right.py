@@ -16,6 +16,6 @@ class RightEnv(GuitarEnv):
 
     def task(self, state, data, links, goal_left, targets):
         out = self.right_part(state, data, links, targets, jnp.ones(N_STRINGS, bool))
-        out["reward"] = out["reward"][None]
+        out["reward"], out["tips"] = out["reward"][None], out["tips"][None]
         out["press"] = jnp.zeros(N_STRINGS, jnp.int32)
         return out

@@ -1,0 +1,108 @@
+"""The env protocol on CPU with 4 envs: jit + vmap, determinism, auto-reset, windows, observation layout."""
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from dexguitar import envs
+from dexguitar.music import timeline as TL
+from dexguitar.music.song import Song, make_note
+
+N_ENVS = 4
+
+
+def scale_song():
+    """Eight eighth notes on string 2 at 100 BPM (1/8 = 0.3 s = 18 frames)."""
+    return Song(100, tuple(make_note("1/8", [-1, f, -1, -1, -1, -1]) for f in (1, 3, 5, 6, 8, 6, 5, 3)), "scale")
+
+
+def chord_song():
+    return Song(100, (make_note("1/4", [1, 1, 2, 3, 3, 1]), make_note("1/4", [0, 1, 0, 2, 3, -1]),
+                      make_note("1/4", [-1] * 6)), "chords")
+
+
+@pytest.fixture(scope="module")
+def left():
+    env = envs.make("left", [scale_song(), chord_song()], episode_frames=12)
+    return env, jax.jit(jax.vmap(env.reset)), jax.jit(jax.vmap(env.step))
+
+
+def rollout(reset, step, key, actions):
+    state = reset(jax.random.split(key, N_ENVS))
+    out = []
+    for a in actions:
+        state = step(state, a)
+        out.append(state)
+    return out
+
+
+def test_same_key_same_trajectory_and_auto_reset(left):
+    env, reset, step = left
+    actions = 0.05 * jax.random.normal(jax.random.PRNGKey(1), (14, N_ENVS, env.action_size))
+    a = rollout(reset, step, jax.random.PRNGKey(0), actions)
+    b = rollout(reset, step, jax.random.PRNGKey(0), actions)
+    c = rollout(reset, step, jax.random.PRNGKey(2), actions)
+    for sa, sb in zip(a, b):
+        np.testing.assert_array_equal(np.asarray(sa.obs), np.asarray(sb.obs))
+        np.testing.assert_array_equal(np.asarray(sa.reward), np.asarray(sb.reward))
+    assert not np.array_equal(np.asarray(a[3].obs), np.asarray(c[3].obs))
+    assert a[0].obs.shape == (N_ENVS, env.obs_size) == (N_ENVS, 2 * 16 * 13 + 35)
+    assert a[0].reward.shape == (N_ENVS, 6)
+    # small actions around the home pose never fail, so every env times out at step 12 and starts over
+    done = np.stack([np.asarray(s.done) for s in a])
+    assert not done[:11].any() and done[11].all()
+    assert np.all(np.asarray(a[11].lifetime) == 0) and np.all(np.asarray(a[12].lifetime) == 1)
+    assert not np.asarray(a[11].terminated).any()
+    assert all(np.isfinite(np.asarray(s.obs)).all() for s in a)
+
+
+def test_training_window_is_a_rest_then_song_notes(left):
+    env, _, _ = left
+    for seed in range(20):
+        w = jax.jit(env.sample_window)(jax.random.PRNGKey(seed))
+        n, dur, lft = int(w.n), np.asarray(w.dur), np.asarray(w.left)
+        assert int(dur[0]) == 5 and np.all(lft[0] == 0)                    # the grace rest
+        assert 2 <= n <= 20 and np.all(dur[1:n] >= 5) and np.all(dur[1:n] <= 50) and np.all(dur[n:] == 0)
+        song = [scale_song(), chord_song()][int(w.song)]
+        code = TL.left_code([song.notes[int(w.first) + i].frets for i in range(n - 1)])
+        pressed = code > 0
+        offset = lft[1:n][pressed] - code[pressed]
+        assert len(set(offset.tolist())) <= 1                             # one fret shift for the whole window
+        np.testing.assert_array_equal(lft[1:n][~pressed], code[~pressed])  # open and mute strings stay
+
+
+def test_evaluation_plays_the_song_from_its_start_and_stops():
+    song = scale_song()
+    env = envs.make("left", [song], envs.EnvConfig().evaluation())
+    reset, step = jax.jit(env.reset), jax.jit(env.step)
+    state = reset(jax.random.PRNGKey(0), 0)
+    w = state.window
+    assert int(w.n) == 8 and np.asarray(w.dur)[:8].tolist() == [18] * 8    # 1/8 at 100 BPM = 18 frames
+    np.testing.assert_array_equal(np.asarray(w.left)[:8, 1], [1, 3, 5, 6, 8, 6, 5, 3])
+    goal = np.asarray(state.obs)[-35:].reshape(5, 7)
+    # slot 0: string 2 at fret 1 -> 1/22, timer 18 frames -> 18/20 - 1 = -0.1; slot 1: fret 3 -> 3/22
+    assert goal[0, 1] == pytest.approx(1 / 22) and goal[0, 6] == pytest.approx(-0.1)
+    assert goal[1, 1] == pytest.approx(3 / 22) and goal[0, 0] == 0.0
+    ends = 0
+    for t in range(8 * 18):
+        state = step(state, jnp.zeros(env.action_size))
+        ends += bool(state.info["note_end"])
+        if t == 17:                                                       # the first note is over
+            assert bool(state.info["note_end"]) and int(state.note) == 1
+    assert ends == 8 and bool(state.done)
+
+
+@pytest.mark.parametrize("hand,obs,columns", [("right", 2 * 16 * 13 + 35, 1), ("duet", 2 * 32 * 13 + 70, 7)])
+def test_right_and_duet_step_under_jit_and_vmap(hand, obs, columns):
+    env = envs.make(hand, [chord_song()])
+    state = jax.jit(jax.vmap(env.reset))(jax.random.split(jax.random.PRNGKey(0), N_ENVS))
+    step = jax.jit(jax.vmap(env.step))
+    for _ in range(3):
+        state = step(state, jnp.zeros((N_ENVS, env.action_size)))
+    assert state.obs.shape == (N_ENVS, obs) and state.reward.shape == (N_ENVS, columns)
+    assert state.privileged.shape == (N_ENVS, 6)
+    assert np.isfinite(np.asarray(state.obs)).all() and np.isfinite(np.asarray(state.reward)).all()
+    # strum targets are contiguous: the C chord (strings 1-5) asks for strings 1-5, the F barre for all six
+    w = state.window
+    assert np.asarray(w.pick)[0, 1:3].tolist() in ([[True] * 6, [True] * 5 + [False]],
+                                                  [[True] * 5 + [False], [False] * 6])

@@ -1,0 +1,191 @@
+"""Rewards in hand-made poses and F1 on hand-made press/pick sequences, values worked out by hand."""
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from dexguitar.envs import rewards as R
+from dexguitar.perform import metrics as M
+from dexguitar.world.guitar import GUITAR
+
+MUTE_ALL = jnp.zeros(6, jnp.int32)
+
+
+def hovering_hand(z=0.05):
+    """12 finger parts far above the strings, each 1 cm long along y, lying flat (usable by the lie-flat test)."""
+    seg = np.zeros((12, 2, 3), np.float32)
+    seg[:, 0] = [0.0, 0.0, z]
+    seg[:, 1] = [0.0, -0.01, z]
+    return seg
+
+
+def test_fingertip_on_the_target_point_scores_one():
+    goal = jnp.array([0, 0, 5, 0, 0, 0])            # string 3 at fret 5, the rest muted
+    seg = hovering_hand()
+    p = GUITAR.target_points[2, 5]
+    seg[2] = [p + [0, 0, 0.02], p]                  # index tip part ending exactly on p_{3,5}
+    press = jnp.array([0, 0, 5, 0, 0, 0])
+    cols, correct = R.left_reward(jnp.asarray(seg), goal, press, energy=1.0)
+    # Eq. 4: d = 0 -> 0.8 + 0.2 = 1; Eq. 7: 0.8 * 1 + 0.2 * r_correct(1) + 0.05 * 1 = 1.05
+    assert float(correct) == 1.0
+    assert float(cols[2]) == pytest.approx(1.05, abs=1e-5)
+    # muted strings: 0.8 * (0.9 + 0.1 * r_open) + 0.2 + 0.05, and the tip sits ~7 mm from strings 2 and 4
+    assert 0.97 < float(cols[1]) < 1.05
+
+
+def test_target_reward_falls_with_distance():
+    goal = jnp.array([0, 0, 5, 0, 0, 0])
+    seg = hovering_hand()
+    p = GUITAR.target_points[2, 5]
+    seg[2] = [p + [0, 0.03, 0.02], p + [0, 0.03, 0.0]]  # 3 cm along the neck from the target
+    cols, correct = R.left_reward(jnp.asarray(seg), goal, MUTE_ALL, energy=0.0)
+    # d = 0.03: 0.8 exp(-0.9) + 0.2 exp(-0.027) = 0.3253 + 0.1947 = 0.5200; r_correct = 0 -> 0.8 * 0.52 = 0.416
+    assert float(correct) == 0.0
+    assert float(cols[2]) == pytest.approx(0.8 * 0.5200, abs=2e-3)
+
+
+def test_finger_resting_on_an_open_string_scores_zero():
+    goal = jnp.array([0, 0, -1, 0, 0, 0])            # string 3 must ring open
+    seg = hovering_hand()
+    a, b = GUITAR.strings[2]
+    seg[5] = [a + 0.3 * (b - a), a + 0.35 * (b - a)]  # a middle-finger part lying on string 3
+    cols, _ = R.left_reward(jnp.asarray(seg), goal, jnp.array([0, 0, 3, 0, 0, 0]), energy=0.0)
+    # Eq. 5: d = 0 -> r_open = 0; pressed where it must be open -> r_correct = 0; column = 0
+    assert float(cols[2]) == pytest.approx(0.0, abs=1e-6)
+
+
+def test_finger_order_examples_of_the_reference():
+    def fingers(goal):
+        return np.asarray(R.finger_order(jnp.array(goal))).astype(int).tolist()
+    # C major (tab 0 1 0 2 3 x, high E first): fret 1 -> index/middle, fret 2 -> middle/ring, fret 3 -> ring/pinky
+    c = fingers([-1, 1, -1, 2, 3, 0])
+    assert c[1] == [1, 1, 0, 0] and c[3] == [0, 1, 1, 0] and c[4] == [0, 0, 1, 1] and c[0] == [0] * 4
+    # F barre 1 1 2 3 3 1: strings 1, 2, 6 are one group at fret 1 -> index/middle
+    f = fingers([1, 1, 2, 3, 3, 1])
+    assert f[0] == f[1] == f[5] == [1, 1, 0, 0] and f[2] == [0, 1, 1, 0] and f[3] == f[4] == [0, 0, 1, 1]
+    # 3 2 3 x x x: the fret-2 string splits the fret-3 strings: string 3 before string 1 (nearer string 6)
+    s = fingers([3, 2, 3, 0, 0, 0])
+    assert s[1] == [1, 1, 0, 0] and s[2] == [0, 1, 1, 0] and s[0] == [0, 0, 1, 1]
+    # five frets cannot be fingered
+    assert sum(map(sum, fingers([1, 2, 3, 4, 5, 0]))) == 0
+
+
+def test_lie_flat_allows_tips_always_and_other_parts_only_when_flat():
+    seg = hovering_hand()
+    seg[0, 1] = seg[0, 0] + [0, -0.01, 0.002]       # proximal part rising 11 deg: not usable
+    seg[2, 1] = seg[2, 0] + [0, -0.01, 0.01]        # tip part at 45 deg: usable (tips always are)
+    flat = np.asarray(R.lie_flat(jnp.asarray(seg)))
+    assert not flat[0] and flat[1] and flat[2]
+
+
+def _x_at(string, y):
+    return float(GUITAR.string_x(string, y))
+
+
+def test_downward_sweep_over_the_target_strings_succeeds():
+    y, z = -0.33, GUITAR.string_z - 0.003
+    p0 = jnp.array([_x_at(6, y) - 0.005, y, z])
+    p1 = jnp.array([_x_at(4, y) + 0.003, y, z])
+    targets = jnp.array([False, False, False, True, True, True])
+    none = jnp.zeros(6, bool)
+    ready = jnp.ones(6, bool)
+    picked, wrong, done, ok = R.pick_update(p0, p1, targets, none, jnp.ones(6, bool), ready, 0.001)
+    assert np.asarray(picked).tolist() == [False, False, False, True, True, True]
+    assert not np.any(np.asarray(wrong)) and np.all(np.asarray(done) == np.asarray(targets))
+    r = R.pick_reward(picked, wrong, targets, done, ok, ready, R.pick_distances(p1))
+    assert float(r) == 1.0                                                    # Eq. 11: r_succ
+
+
+def test_picking_a_non_target_and_skipping_a_target_are_wrong():
+    y, z = -0.33, GUITAR.string_z - 0.003
+    targets = jnp.array([False, False, False, True, True, True])
+    # starting between strings 5 and 4 and sweeping down picks 4, skips 6 and 5 (behind) and also hits 3
+    p0 = jnp.array([(_x_at(5, y) + _x_at(4, y)) / 2, y, z])
+    p1 = jnp.array([(_x_at(3, y) + _x_at(2, y)) / 2, y, z])
+    picked, wrong, done, ok = R.pick_update(p0, p1, targets, jnp.zeros(6, bool), jnp.ones(6, bool),
+                                            jnp.ones(6, bool), 0.0)
+    assert np.asarray(picked).tolist() == [False, False, True, True, False, False]
+    assert np.asarray(wrong).tolist() == [False, False, True, False, True, True]
+    r = R.pick_reward(picked, wrong, targets, done, ok, jnp.ones(6, bool), R.pick_distances(p1))
+    assert 0.0 < float(r) <= 0.2                                              # Eq. 11-12: min_i r_d <= 0.2
+
+
+def test_waiting_between_notes_is_r_minus():
+    # no target left, pick 1 cm above the strings, all clean: 0.4 * 1 + 0.1 * 6 + 0.5 = 1.5 (Eq. 13)
+    p = jnp.array([0.0, -0.33, GUITAR.string_z + 0.01])
+    none = jnp.zeros(6, bool)
+    r = R.pick_reward(none, none, none, none, jnp.ones(6, bool), jnp.ones(6, bool), R.pick_distances(p))
+    assert float(r) == pytest.approx(1.5, abs=1e-5)
+
+
+def test_energy_terms():
+    assert float(R.hand_energy(jnp.zeros(3), jnp.zeros((4, 3)))) == 1.0
+    # |v_w| = 0.5, four tips at 1 m/s -> (0.5 + 0.4)^2 = 0.81 -> exp(-0.81)
+    v = jnp.array([[1.0, 0, 0]] * 4)
+    assert float(R.hand_energy(jnp.array([0.5, 0, 0]), v)) == pytest.approx(np.exp(-0.81), rel=1e-5)
+    # pick: v = 0.1 m/s -> exp(-0.2); a = 20 m/s^2 -> 14 * (0.05 * 20)^4 = 14 (cap at 1 is exactly reached)
+    assert float(R.pick_energy(jnp.array([0.1, 0, 0]), jnp.zeros(3))) == pytest.approx(np.exp(-0.2), rel=1e-5)
+    assert float(R.pick_energy(jnp.zeros(3), jnp.array([40.0, 0, 0]))) == pytest.approx(1 - 14, rel=1e-5)
+
+
+# ------------------------------------------------------------------------------------------------ metrics
+
+def run_note(goal, presses, picks=None, errors=None, targets=None):
+    tally = M.empty_tally()
+    goal = jnp.asarray(goal)
+    for t, press in enumerate(presses):
+        pk = None if picks is None else jnp.asarray(picks[t], bool)
+        er = None if errors is None else jnp.asarray(errors[t], bool)
+        tally = M.update(tally, jnp.asarray(press), goal, pk, er)
+    return {k: np.asarray(v) for k, v in M.close(tally, len(presses), goal,
+                                                    None if targets is None else jnp.asarray(targets)).items()}
+
+
+def test_left_needs_two_thirds_continuous():
+    goal = [0, 0, 5, 0, 0, 0]
+    on, off = [0, 0, 5, 0, 0, 0], [0, 0, 0, 0, 0, 0]
+    # 9 frames: pressed for frames 0-5 (6 >= 2/3 * 9) -> TP, P = R = F1 = 1
+    s = run_note(goal, [on] * 6 + [off] * 3)["left"]
+    assert s[:3].tolist() == [1.0, 1.0, 1.0]
+    # pressed 5 frames, gap, 3 frames: longest run 5 < 6 -> not pressed: P = 0/0 = 1, R = 0 -> F1 = 0
+    s = run_note(goal, [on] * 5 + [off] + [on] * 3)["left"]
+    assert s[:3].tolist() == [1.0, 0.0, 0.0]
+
+
+def test_left_wrong_fret_and_extra_string():
+    goal = [0, 3, 2, 0, 0, 0]
+    # string 2 at fret 3 correct, string 3 at fret 4 (wrong), string 1 (mute, not counted) pressed
+    s = run_note(goal, [[7, 3, 4, 0, 0, 0]] * 9)["left"]
+    # TP = 1, predicted = non-mute strings pressed = 2, targets = 2 -> P = R = F1 = 0.5
+    assert s[:3].tolist() == [0.5, 0.5, 0.5]
+
+
+def test_right_once_and_only_once():
+    goal = [0, 0, -1, -1, -1, 0]
+    targets = [False, False, True, True, True, False]
+    press = [[0] * 6] * 6
+    picks = [[0, 0, 0, 0, 1, 0], [0, 0, 0, 1, 0, 0], [0, 0, 1, 0, 0, 0], [0] * 6, [0, 0, 1, 0, 0, 0], [0] * 6]
+    errors = [[0] * 6] * 4 + [[0, 0, 1, 0, 0, 0], [0] * 6]              # string 3 picked twice -> wrong
+    s = run_note(goal, press, picks, errors, targets)
+    # TP = strings 4, 5; predicted = 3 strings picked; targets 3 -> P = R = F1 = 2/3
+    np.testing.assert_allclose(s["right"][:3], [2 / 3, 2 / 3, 2 / 3], rtol=1e-6)
+
+
+def test_both_hands_need_the_press_at_the_pick_and_after():
+    goal = [0, 5, 0, 0, 0, 0]
+    targets = [False, True, False, False, False, False]
+    pick = [[0, 1, 0, 0, 0, 0]]
+    on, off = [0, 5, 0, 0, 0, 0], [0] * 6
+    # picked at frame 0 while pressed, held 6 of 9 frames -> correct
+    s = run_note(goal, [on] * 6 + [off] * 3, pick + [[0] * 6] * 8, None, targets)
+    assert s["both"][2] == 1.0 and s["right"][2] == 1.0
+    # picked at frame 0 before the press arrives (frame 1 on): right hand fine, both hands wrong
+    s = run_note(goal, [off] + [on] * 8, pick + [[0] * 6] * 8, None, targets)
+    assert s["right"][2] == 1.0 and s["both"][2] == 0.0
+    # pressed at the pick but released after 4 frames: 4 < 6 -> wrong
+    s = run_note(goal, [on] * 4 + [off] * 5, pick + [[0] * 6] * 8, None, targets)
+    assert s["both"][2] == 0.0
+
+
+def test_a_rest_played_as_a_rest_is_perfect():
+    s = run_note([0] * 6, [[0] * 6] * 5, [[0] * 6] * 5, None, [False] * 6)
+    assert s["left"][2] == s["right"][2] == s["both"][2] == 1.0
