@@ -128,6 +128,67 @@ def _bench_env(args) -> int:
     return 0
 
 
+def _songs(sources, hand: str, procedural: int):
+    """Songs from files, embedded names or folders; or procedural material when none are given."""
+    from dexguitar.music import load_song, procedural as PR
+    songs = []
+    for source in sources or []:
+        path = Path(source)
+        if path.is_dir():
+            files = sorted(p for p in path.iterdir() if p.suffix.lower() in
+                           (".json", ".txt", ".tab", ".gp3", ".gp4", ".gp5", ".mid", ".midi"))
+            songs += [load_song(p) for p in files]
+        else:
+            songs.append(load_song(source))
+    if not songs:
+        make = PR.right_patterns if hand == "right" else PR.left_exercises
+        songs = make(0, procedural)
+    return songs
+
+
+def _train(args) -> int:
+    import jax
+
+    from dexguitar.learn.run import load_config, train
+    from dexguitar.learn.trainer import Trainer
+    from dexguitar.motion import load_motion
+    from dexguitar.motion.kinematics import reference_frames
+    from dexguitar.music import timeline as TL
+    cfg, env_cfg = load_config(args.config, hand=args.hand, num_envs=args.envs, seed=args.seed,
+                               iterations=args.iterations)
+    songs = _songs(args.song, cfg.hand, args.procedural)
+    motion = load_motion(args.motion or cfg.hand)
+    trainer = Trainer(cfg, [TL.from_song(s) for s in songs], reference_frames(motion), env_cfg)
+    print(f"training the {cfg.hand} hand on {len(songs)} song(s) with {cfg.num_envs} envs x {cfg.horizon} steps "
+          f"({cfg.batch} samples per iteration) on {jax.devices()[0].device_kind}; reference motion "
+          f"{motion.name} ({motion.qpos.shape[0] / motion.fps:.1f} s); writing {args.out}", file=sys.stderr)
+    summary = train(trainer, args.out, iterations=cfg.iterations, resume=args.resume,
+                    meta={"songs": [s.title for s in songs], "motion": motion.name},
+                    stop_after_calls=args.stop_after_calls, max_minutes=args.max_minutes)
+    print(json.dumps(summary))
+    return 0
+
+
+def _eval(args) -> int:
+    from dexguitar.learn.run import policy_from
+    from dexguitar.music import load_song
+    from dexguitar.perform.evaluate import evaluate
+    act, meta = policy_from(args.ckpt)
+    songs = [load_song(s) for s in args.song]
+    results = evaluate(meta["hand"], act, songs)
+    if args.json:
+        print(json.dumps({k: v if args.notes else v["summary"] for k, v in results.items()}, indent=2))
+        return 0
+    for title, res in results.items():
+        s = res["summary"]
+        hands = [h for h in ("left", "right", "both") if h in s]
+        print(f"{title}: " + "  ".join(f"{h} F1 {s[h]['f1']:.3f} (P {s[h]['precision']:.3f} R {s[h]['recall']:.3f},"
+                                       f" {s[h]['notes']} notes)" for h in hands))
+        for chord, f1 in sorted(s["chords"].items(), key=lambda kv: kv[1]):
+            print(f"    chord {chord:>14s}  F1 {f1:.3f}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="dexguitar", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -156,6 +217,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--bare", action="store_true", help="also time the MJX physics alone")
     p.add_argument("--json", help="write the results to this file")
     p.set_defaults(func=_bench_env)
+
+    p = sub.add_parser("train", help="train one hand (PPO + imitation); resumable")
+    p.add_argument("--hand", choices=["left", "right"], default=None)
+    p.add_argument("--song", nargs="*", help="tab files, embedded song names or folders (none: procedural)")
+    p.add_argument("--procedural", type=int, default=64, help="procedural songs when no --song is given")
+    p.add_argument("--config", help="experiments/*.py defining CONFIG (a TrainConfig) and optionally ENV")
+    p.add_argument("--motion", help="reference motion (.npz/.json; default: the shipped clip for the hand)")
+    p.add_argument("--out", required=True, help="run directory (checkpoints, metrics.jsonl, policy/)")
+    p.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
+    p.add_argument("--envs", type=int, help="override CONFIG.num_envs")
+    p.add_argument("--iterations", type=int, help="override CONFIG.iterations (total, counting resumed ones)")
+    p.add_argument("--seed", type=int)
+    p.add_argument("--max-minutes", type=float, help="stop (with a checkpoint) after this much wall time")
+    p.add_argument("--stop-after-calls", type=int, help=argparse.SUPPRESS)
+    p.set_defaults(func=_train)
+
+    p = sub.add_parser("eval", help="F1 per hand by the paper's rules, per song and per chord")
+    p.add_argument("--ckpt", required=True, help="a run directory or an exported policy directory")
+    p.add_argument("--song", nargs="+", required=True)
+    p.add_argument("--json", action="store_true")
+    p.add_argument("--notes", action="store_true", help="with --json: include the per-note rows")
+    p.set_defaults(func=_eval)
 
     p = sub.add_parser("check", help="print the embedded songs and check that every scene steps in MJX")
     p.add_argument("--envs", type=int, default=4)

@@ -80,6 +80,7 @@ class State:
     done: jnp.ndarray          # bool: the episode ended with this transition (the state is already reset)
     terminated: jnp.ndarray    # bool: ended by failure (not a time-out)
     links: jnp.ndarray         # float32 (hands, 16, 7) current link position + quaternion (guitar frame)
+    link_hist: jnp.ndarray     # float32 (3, hands, 16, 7) the last three frames of links (discriminator input)
     hist: jnp.ndarray          # float32 (HISTORY, hands * 16 * 13)
     window: Window
     note: jnp.ndarray          # int32 current row of the window
@@ -320,7 +321,7 @@ class GuitarEnv:
         state = State(
             data=data, obs=jnp.zeros(self.obs_size), privileged=jnp.ones(N_STRINGS),
             reward=jnp.zeros(len(self.reward_columns)), done=jnp.bool_(False), terminated=jnp.bool_(False),
-            links=links, hist=jnp.stack([feats] * HISTORY), window=window, note=jnp.int32(0),
+            links=links, link_hist=jnp.stack([links] * 3), hist=jnp.stack([feats] * HISTORY), window=window, note=jnp.int32(0),
             note_frame=jnp.int32(0), lifetime=jnp.int32(0), key=k_next, picked=picked,
             pick_ok=jnp.ones(N_STRINGS, bool), pick_hist=jnp.stack([pick, pick]), tips=tips,
             tally=M.empty_tally(), info=self.empty_info())
@@ -401,6 +402,7 @@ class GuitarEnv:
         reward = jnp.where(terminated, cfg.terminate_reward, out["reward"])
         stepped = state.replace(
             data=data, reward=reward, done=terminated | truncated, terminated=terminated, links=links, hist=hist,
+            link_hist=jnp.concatenate([state.link_hist[1:], links[None]]),
             window=window, note=note, note_frame=note_frame, lifetime=lifetime, picked=picked, pick_ok=pick_ok,
             pick_hist=out.get("pick_hist", state.pick_hist), tips=out["tips"], tally=tally, info=info,
             privileged=pick_ok.astype(jnp.float32))

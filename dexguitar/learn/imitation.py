@@ -1,0 +1,66 @@
+"""GAN-like motion imitation (ICCGAN, reference §7.4): discriminators on 3 frames of link poses, hinge loss with a
+gradient penalty, half simulated and half reference samples, a replay buffer of simulated samples.
+
+The left hand has a composite pair of discriminators (wrist + thumb relative to the guitar; the four fingers relative
+to the wrist), so the fingers are free of the wrist's pose; the right hand has one for the whole hand."""
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from dexguitar.envs.core import positive_w, quat_conj, quat_mul, quat_to_mat
+
+# name -> (link indices into hands.KEY_LINKS, parent): "guitar" = as observed, "wrist" = relative to the wrist
+DISCRIMINATORS = {
+    "left": {"wrist": (tuple(range(4)), "guitar"), "fingers": (tuple(range(4, 16)), "wrist")},
+    "right": {"hand": (tuple(range(16)), "guitar")},
+}
+FRAMES = 3
+
+
+def features(link_hist, links, parent):
+    """(..., 3, 16, 7) link pose history -> (..., 3, len(links) * 7) discriminator input."""
+    sel = link_hist[..., jnp.asarray(links), :]
+    if parent == "wrist":
+        wrist = link_hist[..., 0:1, :]
+        rot = quat_to_mat(wrist[..., 3:])                                  # (..., 1, 3, 3)
+        pos = jnp.einsum("...ij,...i->...j", rot, sel[..., :3] - wrist[..., :3])
+        quat = positive_w(quat_mul(quat_conj(wrist[..., 3:]), sel[..., 3:]))
+        sel = jnp.concatenate([pos, quat], axis=-1)
+    return sel.reshape(sel.shape[:-2] + (-1,))
+
+
+def hinge_loss(apply, params, real, fake, key, gp_weight: float = 10.0):
+    """mean ReLU(1 - D(real)) + mean ReLU(1 + D(fake)) + gp_weight * (|grad D(x_hat)| - 1)^2."""
+    d_real, d_fake = apply(params, real), apply(params, fake)
+    loss = jnp.mean(jax.nn.relu(1.0 - d_real)) + jnp.mean(jax.nn.relu(1.0 + d_fake))
+    alpha = jax.random.uniform(key, (real.shape[0],) + (1,) * (real.ndim - 1))
+    mixed = alpha * real + (1 - alpha) * fake
+    grad = jax.grad(lambda x: jnp.sum(apply(params, x)))(mixed)
+    norm = jnp.sqrt(jnp.sum(grad.reshape(grad.shape[0], -1) ** 2, axis=-1) + 1e-12)
+    gp = jnp.mean((norm - 1.0) ** 2)
+    return loss + gp_weight * gp, {"disc_loss": loss, "grad_penalty": gp, "d_real": jnp.mean(d_real),
+                                   "d_fake": jnp.mean(d_fake)}
+
+
+def sample_reference(key, frames, n: int):
+    """n windows of FRAMES consecutive control frames from reference link poses (T, 16, 7)."""
+    start = jax.random.randint(key, (n,), 0, frames.shape[0] - FRAMES + 1)
+    return frames[start[:, None] + jnp.arange(FRAMES)[None, :]]
+
+
+def buffer_init(size: int, shape):
+    return {"data": jnp.zeros((size,) + tuple(shape)), "filled": jnp.int32(0), "head": jnp.int32(0)}
+
+
+def buffer_add(buf, samples):
+    """Ring buffer insert of n samples (n <= size)."""
+    size, n = buf["data"].shape[0], samples.shape[0]
+    idx = (buf["head"] + jnp.arange(n)) % size
+    return {"data": buf["data"].at[idx].set(samples), "filled": jnp.minimum(buf["filled"] + n, size),
+            "head": (buf["head"] + n) % size}
+
+
+def buffer_sample(key, buf, n: int):
+    idx = jax.random.randint(key, (n,), 0, jnp.maximum(buf["filled"], 1))
+    return buf["data"][idx]

@@ -1,0 +1,179 @@
+"""Pictures of a motion: a PNG strip of evenly spaced frames, or an .mp4 video (with `imageio-ffmpeg`).
+
+Rendering uses MuJoCo's own OpenGL renderer on the full visual scene (`scene.build_spec(hand, visual=True)`), with
+a free camera looking at the hand (or the scene's "front" camera). Headless machines need an offscreen GL: we use
+`MUJOCO_GL` when it names egl / osmesa, else try OSMesa, then EGL. The context is made here (not by
+`mujoco.Renderer`, which fixes its GL backend when `mujoco` is first imported). PNGs are written by a small zlib
+encoder, so no imaging library is needed.
+"""
+from __future__ import annotations
+
+import os
+import struct
+import zlib
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from dexguitar.motion.format import Motion
+from dexguitar.world import scene as S
+
+
+# ----------------------------------------------------------------------------------------------------- PNG
+
+def write_png(path: str | Path, rgb: np.ndarray) -> Path:
+    """Write an (H, W, 3) uint8 image as an 8-bit RGB PNG."""
+    rgb = np.ascontiguousarray(rgb, dtype=np.uint8)
+    if rgb.ndim != 3 or rgb.shape[2] != 3:
+        raise ValueError(f"expected an (H, W, 3) image, got {rgb.shape}")
+    h, w, _ = rgb.shape
+    raw = np.concatenate([np.zeros((h, 1), np.uint8), rgb.reshape(h, w * 3)], axis=1)   # filter byte 0 per row
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+           + chunk(b"IDAT", zlib.compress(raw.tobytes(), 6)) + chunk(b"IEND", b""))
+    path = Path(path)
+    path.write_bytes(png)
+    return path
+
+
+def png_size(path: str | Path) -> tuple[int, int]:
+    """(width, height) from a PNG header; raises ValueError if the file is not a PNG."""
+    head = Path(path).read_bytes()[:24]
+    if head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
+        raise ValueError(f"{path}: not a PNG file")
+    return struct.unpack(">II", head[16:24])
+
+
+# ----------------------------------------------------------------------------------------------------- GL
+
+def _gl_context(width: int, height: int):
+    """An offscreen OpenGL context: MUJOCO_GL's choice when it is egl / osmesa, else OSMesa, then EGL."""
+    choice = os.environ.get("MUJOCO_GL", "").lower()
+    order = [choice] if choice in ("egl", "osmesa") else ["osmesa", "egl"]
+    errors = []
+    for name in order:
+        try:
+            if name == "osmesa":
+                from mujoco.osmesa import GLContext
+            else:
+                from mujoco.egl import GLContext
+            ctx = GLContext(width, height)
+            ctx.make_current()
+            return ctx
+        except Exception as e:     # noqa: BLE001 - missing libraries surface as many error types
+            errors.append(f"{name}: {type(e).__name__}: {e}")
+    raise RuntimeError("no offscreen OpenGL for rendering (" + "; ".join(errors) + "). Install libosmesa6 "
+                       "(Debian/Ubuntu) or an EGL driver, or set MUJOCO_GL=egl|osmesa.")
+
+
+class MotionRenderer:
+    """Renders frames of one motion's scene. `camera`: "hand" (a free camera looking at the motion's mean wrist
+    position) or the name of a scene camera ("front")."""
+
+    def __init__(self, motion: Motion, width: int = 480, height: int = 360, camera: str = "hand",
+                 mirror: bool = False):
+        from dexguitar.motion import kinematics as K
+        self.motion = motion
+        self.model = S.build_spec(motion.hand, mirror=mirror, visual=True).compile()
+        m = self.model
+        m.vis.global_.offwidth = max(m.vis.global_.offwidth, width)
+        m.vis.global_.offheight = max(m.vis.global_.offheight, height)
+        m.vis.headlight.ambient[:] = 0.35
+        m.vis.headlight.diffuse[:] = 0.6
+        self.width, self.height = width, height
+        self.data = mujoco.MjData(m)
+        mujoco.mj_resetDataKeyframe(m, self.data, 0)
+        kin = K.hand_kinematics(motion.hand, mirror)
+        self.qpos = kin.model_qpos(motion)
+        self.qadr = np.asarray(S.hand_index(m, motion.hand).qpos)
+        self._ctx = _gl_context(width, height)
+        self._con = mujoco.MjrContext(m, mujoco.mjtFontScale.mjFONTSCALE_100)
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._con)
+        self._scene = mujoco.MjvScene(m, maxgeom=2000)
+        self._opt = mujoco.MjvOption()
+        self._pert = mujoco.MjvPerturb()
+        self.camera = mujoco.MjvCamera()
+        if camera == "hand":
+            wrist = S.hand_index(m, motion.hand).key_bodies[0]
+            pts = []
+            for q in self.qpos[:: max(1, len(self.qpos) // 50)]:
+                self.data.qpos[self.qadr] = q
+                mujoco.mj_kinematics(m, self.data)
+                pts.append(self.data.xpos[wrist].copy())
+            self.camera.type = mujoco.mjtCamera.mjCAMERA_FREE
+            self.camera.lookat[:] = np.mean(pts, axis=0)
+            self.camera.distance = 0.5
+            # Seen from in front of the fretboard (guitar +z), a little from the treble side and the body:
+            # direction lookat -> camera in the guitar frame, turned into the free camera's azimuth / elevation.
+            _, rot = S.guitar_pose(m)
+            sign = -1.0 if mirror else 1.0
+            view = rot @ np.array([0.35 * sign, -0.25, 1.0])
+            fwd = -view / np.linalg.norm(view)
+            self.camera.azimuth = float(np.degrees(np.arctan2(fwd[1], fwd[0])))
+            self.camera.elevation = float(np.degrees(np.arcsin(fwd[2])))
+        else:
+            cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, camera)
+            if cid < 0:
+                raise ValueError(f"no camera {camera!r} in the scene (use 'hand' or 'front')")
+            self.camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
+            self.camera.fixedcamid = cid
+
+    def frame(self, t: int) -> np.ndarray:
+        """(H, W, 3) uint8 image of motion frame t."""
+        m, d = self.model, self.data
+        self._ctx.make_current()
+        d.qpos[self.qadr] = self.qpos[t]
+        mujoco.mj_kinematics(m, d)
+        mujoco.mjv_updateScene(m, d, self._opt, self._pert, self.camera, mujoco.mjtCatBit.mjCAT_ALL, self._scene)
+        rect = mujoco.MjrRect(0, 0, self.width, self.height)
+        mujoco.mjr_render(rect, self._scene, self._con)
+        rgb = np.empty((self.height, self.width, 3), np.uint8)
+        mujoco.mjr_readPixels(rgb, None, rect, self._con)
+        return np.flipud(rgb)
+
+    def close(self):
+        if self._ctx is not None:
+            self._con.free()
+            self._ctx.free()
+            self._ctx = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def strip_frames(n_frames: int, count: int) -> np.ndarray:
+    """`count` evenly spaced frame indices from first to last."""
+    return np.unique(np.round(np.linspace(0, n_frames - 1, max(1, min(count, n_frames)))).astype(int))
+
+
+def render_motion(motion: Motion, out: str | Path, *, frames: int = 8, width: int = 480, height: int = 360,
+                  camera: str = "hand", mirror: bool = False, video_fps: float = 30.0) -> Path:
+    """Write `out`: a .png strip of `frames` evenly spaced frames side by side (frames * width x height), or an
+    .mp4 of the whole motion at `video_fps` (needs the optional `imageio-ffmpeg`). Returns the path."""
+    out = Path(out)
+    if out.suffix.lower() == ".mp4":
+        try:
+            import imageio_ffmpeg
+        except ImportError:
+            raise RuntimeError(f"{out}: writing .mp4 needs the optional package imageio-ffmpeg "
+                               f"(pip install imageio-ffmpeg); render a .png strip instead") from None
+        idx = np.round(np.arange(0, motion.seconds + 1e-9, 1.0 / video_fps) * motion.fps).astype(int)
+        with MotionRenderer(motion, width, height, camera, mirror) as r:
+            writer = imageio_ffmpeg.write_frames(str(out), (width, height), fps=video_fps, macro_block_size=1)
+            writer.send(None)
+            for t in idx:
+                writer.send(np.ascontiguousarray(r.frame(int(t))))
+            writer.close()
+        return out
+    if out.suffix.lower() != ".png":
+        raise ValueError(f"{out}: expected a .png (frame strip) or .mp4 (video) path")
+    with MotionRenderer(motion, width, height, camera, mirror) as r:
+        images = [r.frame(int(t)) for t in strip_frames(motion.n_frames, frames)]
+    return write_png(out, np.concatenate(images, axis=1))
