@@ -174,7 +174,13 @@ def _eval(args) -> int:
     from dexguitar.music import load_song
     from dexguitar.perform.evaluate import evaluate
     act, meta = policy_from(args.ckpt)
-    songs = [load_song(s) for s in args.song]
+    songs = [load_song(s) for s in args.song or []]
+    if args.procedural:
+        from dexguitar.music import procedural as PR
+        make = PR.right_patterns if meta["hand"] == "right" else PR.left_exercises
+        songs += make(args.seed, args.procedural)
+    if not songs:
+        raise SystemExit("eval: give --song and/or --procedural N")
     results = evaluate(meta["hand"], act, songs)
     if args.json:
         print(json.dumps({k: v if args.notes else v["summary"] for k, v in results.items()}, indent=2))
@@ -235,7 +241,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("eval", help="F1 per hand by the paper's rules, per song and per chord")
     p.add_argument("--ckpt", required=True, help="a run directory or an exported policy directory")
-    p.add_argument("--song", nargs="+", required=True)
+    p.add_argument("--song", nargs="*")
+    p.add_argument("--procedural", type=int, default=0, help="also N procedural songs (a held-out seed)")
+    p.add_argument("--seed", type=int, default=1000, help="seed of the procedural songs (training uses 0)")
     p.add_argument("--json", action="store_true")
     p.add_argument("--notes", action="store_true", help="with --json: include the per-note rows")
     p.set_defaults(func=_eval)

@@ -70,14 +70,18 @@ def summarize(rows, hands) -> dict:
 
 
 def evaluate(hand: str, act, songs, env_config=None) -> dict:
-    """F1 of a policy `act(obs) -> action` on each song. Returns {title: summary} plus per-note rows."""
+    """F1 of a policy `act(obs) -> action` on each song, all songs played at once (one env each, vmapped).
+    Returns {title: {"summary", "notes"}}."""
     timelines = [TL.from_song(s) for s in songs]
     cfg = (env_config or E.EnvConfig()).evaluation()
     env = E.make(hand, timelines, cfg)
+    frames = max(int(tl.n_frames) for tl in timelines) + 2
+    play = jax.jit(jax.vmap(lambda i: rollout_song(env, act, i, frames)))
+    info, _ = jax.device_get(play(jnp.arange(len(songs))))
     results = {}
-    for i, (song, tl) in enumerate(zip(songs, timelines)):
-        frames = int(tl.n_frames) + 2
-        info, _ = jax.jit(rollout_song, static_argnums=(0, 1, 3))(env, act, i, frames)
-        rows = note_scores(info, song, HANDS[hand])
-        results[song.title or f"song{i}"] = {"summary": summarize(rows, HANDS[hand]), "notes": rows}
+    for i, song in enumerate(songs):
+        rows = note_scores(jax.tree.map(lambda x: x[i], info), song, HANDS[hand])
+        title = song.title or f"song{i}"
+        results[title if title not in results else f"{title} ({i})"] = {"summary": summarize(rows, HANDS[hand]),
+                                                                        "notes": rows}
     return results

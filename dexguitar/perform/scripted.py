@@ -16,7 +16,9 @@ How it plays, per hand, before the rollout (`plan`):
 3. `Tracker`: the hands are slow PD systems (kp = 10; the 0.2 kg wrist rings for ~0.5 s), so the desired joint
    trajectory is turned into PD targets by a one-step inverse model, computed by finite differences with
    `mujoco.rollout` on the same model the env uses. The result is an open-loop action sequence for the env.
-`play` rolls the MJX env with those actions and reads the per-note scores from `State.info`.
+4. Both hands (duet): the left hand is planned and simulated first; the right hand crosses each note's strings only
+   once the simulated left hand holds the note (the duet's strict gate counts earlier picks as wrong).
+`play` rolls the MJX env with those actions (vmapped over songs) and reads the per-note scores from `State.info`.
 
 Run `python -m dexguitar.perform.scripted` for the F1 table of the embedded single-note songs.
 """
@@ -24,7 +26,6 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-import functools
 import time
 import warnings
 
@@ -35,11 +36,10 @@ from scipy.optimize import least_squares
 
 from dexguitar.world import hands as H
 from dexguitar.world import scene as S
-from dexguitar.world.guitar import Guitar
+from dexguitar.world.guitar import GUITAR
 
 DT = 1.0 / S.CONTROL_HZ
 N_STRINGS = 6
-FINGER_RADIUS = 0.006
 
 
 # ------------------------------------------------------------------------------------------------- notes
@@ -88,9 +88,9 @@ class Tracker:
     small differences.
     """
 
-    def __init__(self, scene: str, roles: tuple[str, ...], mirror: bool = False, w_v: float = 0.03,
-                 reg: float = 1e-4, eps: float = 1e-3):
-        self.model = S.build_model(scene, mirror=mirror)
+    def __init__(self, scene: str, roles: tuple[str, ...] | None = None, w_v: float = 0.03, reg: float = 1e-4,
+                 eps: float = 1e-3):
+        self.model = S.build_model(scene)          # `roles`: the scene's hands, implied by `scene` (kept for callers)
         self.data = mujoco.MjData(self.model)
         self.threads = [mujoco.MjData(self.model)]
         m = self.model
@@ -160,8 +160,8 @@ def _without_contacts(model: mujoco.MjModel) -> mujoco.MjModel:
 class Kinematics:
     """MuJoCo C forward kinematics of one hand in one scene, in the guitar frame."""
 
-    def __init__(self, scene: str, role: str, mirror: bool = False):
-        self.model = S.build_model(scene, mirror=mirror)
+    def __init__(self, scene: str, role: str):
+        self.model = S.build_model(scene)
         self.data = mujoco.MjData(self.model)
         self.hand = S.hand_index(self.model, role)
         self.pos, self.rot = S.guitar_pose(self.model)
@@ -224,15 +224,14 @@ class ScriptedRight:
     stroke_frames = 8      # one string; +2 per extra string
     cross_frame = 2        # the (first) string is crossed during this step of the note
 
-    def __init__(self, mirror: bool = False, scene: str = "right"):
-        self.guitar = Guitar(mirror=mirror)
-        self.kin = Kinematics(scene, "right", mirror)
-        self.scene, self.mirror = scene, mirror
+    def __init__(self):
+        self.guitar = GUITAR
+        self.kin = Kinematics("right", "right")
         self.kin.set(self.kin.home)
         self.pick0 = self.kin.site(self.kin.hand.pick)
         self.y = self.pick0[1]
         sign = self.guitar.sign
-        self.xs = np.array([self.guitar.string_x(i + 1, self.y) for i in range(N_STRINGS)]) * 1.0
+        self.xs = np.array([self.guitar.string_x(i + 1, self.y) for i in range(N_STRINGS)])
         gap = np.abs(np.diff(self.xs)).mean()
         # gaps: g[0] beyond string 1, g[i] between strings i and i+1 (0-based i-1, i), g[6] beyond string 6
         self.gaps = np.concatenate([[self.xs[0] + sign * gap / 2], (self.xs[:-1] + self.xs[1:]) / 2,
@@ -376,10 +375,10 @@ class ScriptedLeft:
     shift_frames = 10       # hand position change (the wrist slides are slow: kp 10 on 0.2 kg)
     start_frames = 10       # from the home pose to the first note's position
 
-    def __init__(self, mirror: bool = False, scene: str = "left"):
-        self.guitar = Guitar(mirror=mirror)
-        self.kin = Kinematics(scene, "left", mirror)
-        self.posture = H.mirror_qpos(np.concatenate([np.zeros(6), POSTURE]), "left")[6:] if mirror else POSTURE
+    def __init__(self):
+        self.guitar = GUITAR
+        self.kin = Kinematics("left", "left")
+        self.posture = POSTURE
         self._positions: dict[int, np.ndarray] = {}
         self._fingers: dict[tuple, np.ndarray] = {}
 
@@ -387,10 +386,10 @@ class ScriptedLeft:
     def fret_mid(self, k: int) -> float:
         return float((self.guitar.fret_y[k] + self.guitar.fret_y[k - 1]) / 2)
 
-    def press_point(self, s: int, k: int) -> np.ndarray:
-        """Tip target for string s (0-based) at fret k: on p_{s,k}, resting on the fretboard."""
+    def press_point(self, s: int, k: int, f: int = 0) -> np.ndarray:
+        """Tip target of finger f for string s (0-based) at fret k: on p_{s,k}, its capsule resting on the board."""
         p = self.guitar.target_points[s, k].copy()
-        p[2] = self.guitar.fretboard_z + FINGER_RADIUS - self.press_depth
+        p[2] = self.guitar.fretboard_z + H.RADII[H.FINGERS[f]][2] - self.press_depth
         return p
 
     def hover_point(self, x: float, k: int) -> np.ndarray:
@@ -425,7 +424,7 @@ class ScriptedLeft:
                     qq = q.copy()
                     qq[FINGER_DOFS[f]] = z[27 + 16 * j + 4 * f: 31 + 16 * j + 4 * f]
                     k.set(qq)
-                    out.append(30 * (k.site(hand.tips[f]) - self.press_point(s, frets[f])))
+                    out.append(30 * (k.site(hand.tips[f]) - self.press_point(s, frets[f], f)))
             return np.concatenate(out)
 
         z0 = np.concatenate([q0, q0[11:], q0[11:]])
@@ -511,7 +510,7 @@ class ScriptedLeft:
             for f in range(4):
                 if f in fingers:
                     s, k = fingers[f]
-                    q[FINGER_DOFS[f]] = self.finger(f, p, _key(self.press_point(s, k)), True, s)
+                    q[FINGER_DOFS[f]] = self.finger(f, p, _key(self.press_point(s, k, f)), True, s)
                     if i > 0 and f in plan[i - 1][1] and plan[i - 1][1][f] != (s, k) and plan[i - 1][0] == p:
                         via = self.hover_point(float(g.target_points[s, k, 0]), k)
                         via[2] = g.string_z + 0.007
@@ -598,7 +597,7 @@ class ScriptedLeft:
                 cur, free = q_to, t1
             out[:, dofs] = val
         for t0, t1, f, s, ka, kb in slides:             # the tip stays on the string while the wrist moves
-            pa, pb = self.press_point(s, ka), self.press_point(s, kb)
+            pa, pb = self.press_point(s, ka, f), self.press_point(s, kb, f)
             x = out[max(int(np.floor(t0)), 0), FINGER_DOFS[f]].copy()
             for j in range(max(int(np.ceil(t0)), 0), min(int(np.floor(t1)), T) + 1):
                 u = min_jerk((j - t0) / (t1 - t0))
@@ -643,14 +642,17 @@ class ScriptedPlayer:
 
     Each hand is planned and tracked in its own one-hand scene: the hands never touch each other, so the duet's
     dynamics are the two hands' side by side and the duet action is the two plans concatenated (role order).
+    The left-handed player's scene (`EnvConfig.mirror`) is the exact mirror image of the right-handed one (no
+    gravity, neck and body symmetric in x), so its actions are the right-handed plan mirrored joint by joint.
     """
 
     def __init__(self, env):
         self.env = env
-        mirror = env.config.mirror
         self.roles = env.roles
-        self.hands = {r: (ScriptedLeft if r == "left" else ScriptedRight)(mirror=mirror) for r in self.roles}
-        self.trackers = {r: Tracker(r, (r,), mirror=mirror) for r in self.roles}
+        self.hands = {r: ScriptedLeft() if r == "left" else ScriptedRight() for r in self.roles}
+        self.trackers = {r: Tracker(r) for r in self.roles}
+        self.flip = {r: H.mirror_qpos(np.ones(H.N_DOF), r) if env.config.mirror else np.ones(H.N_DOF)
+                     for r in self.roles}
         self._run = None
 
     def plan(self, window) -> np.ndarray:
@@ -667,7 +669,7 @@ class ScriptedPlayer:
             else:
                 ctrl, _ = self.trackers[r].track(self.hands[r].desired(notes, earliest))
             parts[r] = self.trackers[r].to_action(ctrl)
-        return np.concatenate([parts[r] for r in self.roles], axis=1).astype(np.float32)
+        return np.concatenate([parts[r] * self.flip[r] for r in self.roles], axis=1).astype(np.float32)
 
     def ready_steps(self, notes: Notes, q: np.ndarray) -> np.ndarray:
         """(n,) per note, the first control step whose simulated left hand holds every string as the note asks

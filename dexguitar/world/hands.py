@@ -93,14 +93,20 @@ class Joint:
     damping: float
 
 
-def joints(side: str) -> tuple[Joint, ...]:
-    """The 27 joints of one hand in DoF (= action) order, with ranges for that side."""
+def joints(side: str, role: str | None = None) -> tuple[Joint, ...]:
+    """The 27 joints of one hand in DoF (= action) order, with ranges for that side. The wrist slides span the
+    workspace of the hand's role (fretting = "left", picking = "right"); a hand playing the other side's role (the
+    mirrored, left-handed setup) gets that role's workspace mirrored in x."""
+    role = role or side
+    slides = WRIST_SLIDE_RANGES[role]
+    if role != side:
+        slides = ((-slides[0][1], -slides[0][0]),) + slides[1:]
     def hinge(name, axis, rng, kd=KD_FINGER):
         if side == "left" and axis in "yz":
             rng = (-rng[1], -rng[0])
         return Joint(name, "hinge", axis, tuple(rng), kd)
 
-    out = [Joint(f"wrist_t{a}", "slide", a, WRIST_SLIDE_RANGES[side][i], KD_WRIST) for i, a in enumerate("xyz")]
+    out = [Joint(f"wrist_t{a}", "slide", a, slides[i], KD_WRIST) for i, a in enumerate("xyz")]
     out += [hinge(f"wrist_r{a}", a, WRIST_HINGE_RANGE, KD_WRIST) for a in "xyz"]
     out += [hinge(f"thumb1_{a}", a, THUMB_RANGES[f"thumb1_{a}"]) for a in "xyz"]
     out += [hinge("thumb2", "z", THUMB_RANGES["thumb2"]), hinge("thumb3", "z", THUMB_RANGES["thumb3"])]
@@ -122,14 +128,15 @@ def _fmt(v) -> str:
     return " ".join(f"{float(x):.6g}" for x in np.atleast_1d(v))
 
 
-def hand_xml(side: str) -> str:
+def hand_xml(side: str, role: str | None = None) -> str:
     """MJCF of one hand, to be attached to the guitar body (joints relative to the guitar frame). Names carry no
-    prefix: the scene builder adds one per role."""
+    prefix: the scene builder adds one per role. The picking role (default: the right hand) holds the pick."""
     if side not in ("left", "right"):
         raise ValueError(f"hand side must be 'left' or 'right', got {side!r}")
+    role = role or side
     p = ""
     mx = np.array([-1.0, 1.0, 1.0]) if side == "left" else np.ones(3)
-    js = {j.name: j for j in joints(side)}
+    js = {j.name: j for j in joints(side, role)}
 
     def joint(name, ind):
         j = js[name]
@@ -160,22 +167,22 @@ def hand_xml(side: str) -> str:
         lines.append(f'{ind}<geom name="{p}palm_{f}" fromto="{_fmt(mx * heel)} {_fmt(mx * knuckle)}" size="0.013" '
                      f'mass="{WRIST_MASS / 2:.4g}"/>')
     for f in ("thumb",) + FINGERS:
-        lines += _finger_xml(p, f, side, mx, joint, ind)
+        lines += _finger_xml(p, f, role == "right", mx, joint, ind)
     lines.append("    </body>")
     lines += ["  </worldbody>", "  <contact>"]
-    if side == "right":
+    if role == "right":
         # The pick is held between thumb and index: their contact is the one self-contact we keep (Eq. 15).
         for a, b in (("thumb3", "index2"), ("thumb3", "index3")):
             lines.append(f'    <pair geom1="{p}{a}" geom2="{p}{b}" condim="3"/>')
     lines.append("  </contact>")
     lines.append("  <actuator>")
-    for j in joints(side):
+    for j in joints(side, role):
         lines.append(f'    <position name="{p}{j.name}" class="hand" joint="{p}{j.name}" ctrlrange="{_fmt(j.range)}"/>')
     lines += ["  </actuator>", "</mujoco>", ""]
     return "\n".join(lines)
 
 
-def _finger_xml(p, f, side, mx, joint, ind):
+def _finger_xml(p, f, picking, mx, joint, ind):
     if f == "thumb":
         direction = np.array([1.0, 0.0, 0.0]) * mx          # the thumb points sideways at zero angles
         names = (("thumb1_x", "thumb1_y", "thumb1_z"), ("thumb2",), ("thumb3",))
@@ -193,8 +200,8 @@ def _finger_xml(p, f, side, mx, joint, ind):
                      f'mass="{MASSES[f][k]}"/>')
         if k == 2:
             lines.append(f'{d}<site name="{p}{f}_tip" pos="{_fmt(end)}" size="0.002"/>')
-        if f == "index" and k == 1 and side == "right":
-            lines.append(f'{d}<site name="{p}pick" pos="{_fmt(PICK_OFFSET)}" size="0.003" rgba="0.1 0.1 0.1 1"/>')
+        if f == "index" and k == 1 and picking:
+            lines.append(f'{d}<site name="{p}pick" pos="{_fmt(mx * PICK_OFFSET)}" size="0.003" rgba="0.1 0.1 0.1 1"/>')
     lines += [f'{ind + "  " * k}</body>' for k in range(2, -1, -1)]
     return lines
 

@@ -136,7 +136,7 @@ def build_spec(scene: str = "duet", *, mirror: bool = False, visual: bool = True
         spec.worldbody.add_camera(name="front", pos=[-0.1, 0.75, 1.0], xyaxes=[1, 0, 0, 0, 0.15, 1])
     for role in SCENES[scene]:
         model_side = role if not mirror else ("right" if role == "left" else "left")
-        hand = mujoco.MjSpec.from_string(H.hand_xml(model_side))
+        hand = mujoco.MjSpec.from_string(H.hand_xml(model_side, role))
         spec.attach(hand, prefix=PREFIX[role], frame=body.add_frame())
         for geom in spec.geoms:
             if geom.name.startswith(PREFIX[role]):
@@ -187,8 +187,14 @@ def hand_index(model: mujoco.MjModel, role: str) -> HandIndex:
         segments=tuple((bid(f"{f}1"), bid(f"{f}2"), bid(f"{f}3")) for f in H.FINGERS),
         tips=tuple(sid(f"{f}_tip") for f in H.FINGERS),
         thumb_tip=sid("thumb_tip"),
-        pick=sid("pick") if role == "right" else -1,
+        pick=_required(sid("pick"), "the picking hand has no pick site") if role == "right" else -1,
     )
+
+
+def _required(index: int, message: str) -> int:
+    if index < 0:
+        raise ValueError(message)
+    return index
 
 
 def guitar_pose(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:

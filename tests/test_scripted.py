@@ -1,0 +1,66 @@
+"""The scripted player through the envs: hand-made motions that put fingertips on the press targets and sweep the pick
+across the target strings must score F1 ~ 1, or geometry, detection, bookkeeping and metrics disagree somewhere."""
+import numpy as np
+import pytest
+
+from dexguitar import envs
+from dexguitar.music import timeline as TL
+from dexguitar.music.song import Song, make_note
+from dexguitar.perform.scripted import Notes, ScriptedLeft, ScriptedRight
+
+# (string, fret) single notes in first position: open strings, same-string steps up and down, string changes,
+# strings 1 to 6. An open string first: from the home pose (hand at fret 5) the hand needs ~10 frames to get there.
+MELODY = [(1, 0), (2, 1), (2, 3), (1, 0), (1, 1), (1, 3), (1, 1), (2, 0), (3, 2), (3, 0), (4, 3), (5, 3), (6, 1),
+          (4, 2), (2, 1)]
+
+
+def melody() -> Song:
+    notes = []
+    for j, (string, fret) in enumerate(MELODY):
+        frets = [-1] * 6
+        frets[string - 1] = fret
+        notes.append(make_note("1/4" if j == 0 else "1/8", frets))   # eighths at 120 BPM: 15 frames
+    return Song(tempo=120, notes=tuple(notes), title="scripted test melody")
+
+
+@pytest.fixture(scope="module")
+def timeline():
+    return TL.from_song(melody())
+
+
+def play(hand, timeline):
+    from dexguitar.perform.scripted import ScriptedPlayer
+    env = envs.make(hand, [timeline], envs.EnvConfig().evaluation())
+    result = ScriptedPlayer(env).play(0)
+    assert result["closed"] == len(MELODY) == result["notes"]         # every note closed exactly once
+    assert result["terminated_at"] is None
+    return result[hand]
+
+
+def test_scripted_left_hand_presses_every_note(timeline):
+    score = play("left", timeline)
+    assert score["f1"] >= 0.95, score["per_note"]
+    assert score["precision"] >= 0.95                                 # open strings left alone
+
+
+def test_scripted_right_hand_picks_every_note(timeline):
+    score = play("right", timeline)
+    assert score["f1"] >= 0.95, score["per_note"]
+
+
+def test_fingering_one_finger_per_fret(timeline):
+    left = ScriptedLeft()
+    plan = left.fingering(Notes(np.asarray(timeline.left), np.asarray(timeline.pick), np.asarray(timeline.onset)))
+    assert {p for p, _ in plan} == {1}                                 # frets 1-3: first position throughout
+    for (p, fingers), (string, fret) in zip(plan, MELODY):
+        assert fingers == ({fret - p: (string - 1, fret)} if fret > 0 else {})
+
+
+def test_pick_strokes_alternate_on_one_string(timeline):
+    right = ScriptedRight()
+    notes = Notes(np.asarray(timeline.left), np.asarray(timeline.pick), np.asarray(timeline.onset))
+    segs, _ = right.strokes(notes)
+    strokes = [np.sign(x1 - x0) for _, _, x0, x1, kind in segs if kind[0] == "stroke"]
+    assert len(strokes) == len(MELODY)
+    # notes 4-6 repeat string 1: down, up, down (or the reverse)
+    assert strokes[4] == -strokes[5] == strokes[6]
