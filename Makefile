@@ -4,7 +4,11 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: setup demo test check models clean
+.PHONY: setup demo test check models clean train-left train-right eval plot
+SONG ?= ode_to_joy
+CONFIG_LEFT ?= experiments/left_gpu.py
+CONFIG_RIGHT ?= experiments/right_gpu.py
+OUT ?= runs
 
 $(STAMP): pyproject.toml
 	$(PY) -m venv $(VENV)
@@ -21,6 +25,15 @@ test: $(STAMP)                 ## the CPU test suite
 	JAX_PLATFORMS=cpu $(BIN)/python -m pytest
 
 check: demo
+
+train-left: $(STAMP)           ## make train-left SONG="ode_to_joy twinkle" (files, names or a folder); RESUME=1 continues
+	$(BIN)/dexguitar train --hand left --song $(SONG) --config $(CONFIG_LEFT) --out $(OUT)/left-$(firstword $(notdir $(SONG))) $(if $(RESUME),--resume)
+
+train-right: $(STAMP)          ## procedural picking and strumming patterns
+	$(BIN)/dexguitar train --hand right --config $(CONFIG_RIGHT) --out $(OUT)/right $(if $(RESUME),--resume)
+
+eval: $(STAMP)                 ## make eval CKPT=models/policies/left_ode_to_joy SONG=ode_to_joy
+	$(BIN)/dexguitar eval --ckpt $(CKPT) --song $(SONG)
 
 models: $(STAMP)               ## regenerate models/*.xml from dexguitar/world
 	$(BIN)/python -m dexguitar.world.hands

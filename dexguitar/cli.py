@@ -71,7 +71,8 @@ def _check(args) -> int:
     import jax.numpy as jnp
     import mujoco
     import numpy as np
-    from mujoco import mjx
+    from dexguitar import mjx as quiet_mjx
+    mjx = quiet_mjx()
 
     from dexguitar.world import scene as S
 
@@ -164,7 +165,7 @@ def _train(args) -> int:
           f"{motion.name} ({motion.qpos.shape[0] / motion.fps:.1f} s); writing {args.out}", file=sys.stderr)
     summary = train(trainer, args.out, iterations=cfg.iterations, resume=args.resume,
                     meta={"songs": [s.title for s in songs], "motion": motion.name},
-                    stop_after_calls=args.stop_after_calls, max_minutes=args.max_minutes)
+                    stop_after_calls=args.stop_after_calls, max_minutes=args.max_minutes, init_from=args.init_from)
     print(json.dumps(summary))
     return 0
 
@@ -192,6 +193,12 @@ def _eval(args) -> int:
                                        f" {s[h]['notes']} notes)" for h in hands))
         for chord, f1 in sorted(s["chords"].items(), key=lambda kv: kv[1]):
             print(f"    chord {chord:>14s}  F1 {f1:.3f}")
+    return 0
+
+
+def _plot(args) -> int:
+    from dexguitar.perform.plots import plot_f1
+    print("wrote", plot_f1(args.runs, args.out, args.labels))
     return 0
 
 
@@ -235,6 +242,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--envs", type=int, help="override CONFIG.num_envs")
     p.add_argument("--iterations", type=int, help="override CONFIG.iterations (total, counting resumed ones)")
     p.add_argument("--seed", type=int)
+    p.add_argument("--init-from", help="start the policy (and its normalizer) from an exported policy or run")
     p.add_argument("--max-minutes", type=float, help="stop (with a checkpoint) after this much wall time")
     p.add_argument("--stop-after-calls", type=int, help=argparse.SUPPRESS)
     p.set_defaults(func=_train)
@@ -247,6 +255,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true")
     p.add_argument("--notes", action="store_true", help="with --json: include the per-note rows")
     p.set_defaults(func=_eval)
+
+    p = sub.add_parser("plot", help="F1 against samples from runs' metrics.jsonl (needs the plot extra)")
+    p.add_argument("runs", nargs="+", help="run directories or metrics.jsonl files")
+    p.add_argument("--out", required=True)
+    p.add_argument("--labels", nargs="*")
+    p.set_defaults(func=_plot)
 
     p = sub.add_parser("check", help="print the embedded songs and check that every scene steps in MJX")
     p.add_argument("--envs", type=int, default=4)

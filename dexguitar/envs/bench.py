@@ -5,10 +5,11 @@ from __future__ import annotations
 import time
 
 import jax
-import jax.numpy as jnp
-from mujoco import mjx
+from dexguitar import mjx as _quiet_mjx
 
 from dexguitar.world import scene as S
+
+mjx = _quiet_mjx()
 
 
 def default_songs(hand: str):

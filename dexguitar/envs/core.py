@@ -17,7 +17,7 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 from flax import struct
-from mujoco import mjx
+from dexguitar import mjx as _quiet_mjx
 
 from dexguitar.envs import rewards as R
 from dexguitar.music import timeline as TL
@@ -25,7 +25,9 @@ from dexguitar.perform import metrics as M
 from dexguitar.world import detect
 from dexguitar.world import hands as H
 from dexguitar.world import scene as S
-from dexguitar.world.guitar import GUITAR, N_FRETS, Guitar
+from dexguitar.world.guitar import N_FRETS, Guitar
+
+mjx = _quiet_mjx()
 
 N_STRINGS = 6
 HISTORY = 2                    # frames of link states in the observation (reference §4)
@@ -321,7 +323,8 @@ class GuitarEnv:
         state = State(
             data=data, obs=jnp.zeros(self.obs_size), privileged=jnp.ones(N_STRINGS),
             reward=jnp.zeros(len(self.reward_columns)), done=jnp.bool_(False), terminated=jnp.bool_(False),
-            links=links, link_hist=jnp.stack([links] * 3), hist=jnp.stack([feats] * HISTORY), window=window, note=jnp.int32(0),
+            links=links, link_hist=jnp.stack([links] * 3), hist=jnp.stack([feats] * HISTORY), window=window,
+            note=jnp.int32(0),
             note_frame=jnp.int32(0), lifetime=jnp.int32(0), key=k_next, picked=picked,
             pick_ok=jnp.ones(N_STRINGS, bool), pick_hist=jnp.stack([pick, pick]), tips=tips,
             tally=M.empty_tally(), info=self.empty_info())

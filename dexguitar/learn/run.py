@@ -30,12 +30,20 @@ def chunk_summary(metrics: dict, n_iter: int) -> dict:
 
 
 def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, progress: bool = True,
-          meta: dict | None = None, stop_after_calls: int | None = None, max_minutes: float | None = None) -> dict:
+          meta: dict | None = None, stop_after_calls: int | None = None, max_minutes: float | None = None,
+          init_from=None) -> dict:
     """Run until `iterations` iterations are done (counting those of a resumed run). Returns the last summary."""
     cfg = trainer.config
     out = Path(out_dir)
     ckpt_dir = out / "ckpt"
     state = trainer.init()
+    if init_from and C.latest_step(ckpt_dir) is None:
+        params, meta_init = C.load_policy(Path(init_from) / "policy" if (Path(init_from) / "policy").exists()
+                                          else init_from)
+        if meta_init["hand"] != cfg.hand:
+            raise SystemExit(f"--init-from {init_from}: a {meta_init['hand']} hand policy, not {cfg.hand}")
+        state = state.replace(params=dict(state.params, policy=params["policy"]), obs_norm=params["obs_norm"])
+        print(f"policy initialized from {init_from} ({meta_init.get('samples', 0):,} samples)", file=sys.stderr)
     if C.latest_step(ckpt_dir) is not None:
         if not resume:
             raise SystemExit(f"{out} already holds a run: pass --resume to continue it, or choose another --out")
@@ -71,11 +79,11 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
             calls += 1
             samples_done += n * cfg.batch
             if bar is not None:
-                f1 = {k.split("/")[1]: f"{v:.3f}" for k, v in summary.items() if k.startswith("f1/")
-                      and (k != "f1/right" or "right" in trainer.env.roles) and
-                      (k != "f1/both" or len(trainer.env.roles) == 2) and (k != "f1/left" or "left" in trainer.env.roles)}
-                bar.set_postfix({"samples/s": f"{summary['samples_per_s']:,.0f}", **{f"F1 {k}": v for k, v in f1.items()},
-                                 "reward": f"{np.mean([v for k, v in summary.items() if k.startswith('reward/')]):.3f}"})
+                hands = trainer.env.roles + (("both",) if len(trainer.env.roles) == 2 else ())
+                reward = np.mean([v for k, v in summary.items() if k.startswith("reward/")])
+                bar.set_postfix({"samples/s": f"{summary['samples_per_s']:,.0f}",
+                                 **{f"F1 {h}": f"{summary.get('f1/' + h, float('nan')):.3f}" for h in hands},
+                                 "reward": f"{reward:.3f}"})
                 bar.update(n)
             if stop_after_calls is not None and calls >= stop_after_calls:
                 break
@@ -106,7 +114,8 @@ def export(trainer: Trainer, state, directory) -> None:
     env = trainer.env
     C.export_policy(directory, state.params["policy"], state.obs_norm, {
         "hand": trainer.config.hand, "action_size": env.action_size, "goal_size": env.goal_size,
-        "obs_size": env.obs_size, "iteration": int(state.iteration), "samples": int(state.iteration) * trainer.config.batch,
+        "obs_size": env.obs_size, "iteration": int(state.iteration),
+        "samples": int(state.iteration) * trainer.config.batch,
         "columns": list(trainer.columns)})
 
 

@@ -251,7 +251,7 @@ def right_goal(tl: Timeline, frame, done=None) -> jax.Array:
     return _goal(flags.astype(jnp.float32), valid, timer)
 
 
-# ----------------------------------------------------------------------------------------------------- augmentation (jit)
+# ------------------------------------------------------------------------------------------ augmentation (jit)
 
 def shift(tl: Timeline, offset) -> Timeline:
     """Move every pressed fret (goal, chord-derived and sounding) by `offset`, keeping the chord shape.

@@ -140,17 +140,18 @@ def hand_xml(side: str, role: str | None = None) -> str:
 
     def joint(name, ind):
         j = js[name]
-        return (f'{ind}<joint name="{p}{j.name}" type="{j.kind}" axis="{ {"x": "1 0 0", "y": "0 1 0", "z": "0 0 1"}[j.axis]}" '
+        axis = {"x": "1 0 0", "y": "0 1 0", "z": "0 0 1"}[j.axis]
+        return (f'{ind}<joint name="{p}{j.name}" type="{j.kind}" axis="{axis}" '
                 f'range="{_fmt(j.range)}" damping="{j.damping:g}"/>')
 
     lines = [f'<mujoco model="{side}_hand">',
              '  <!-- Written by dexguitar.world.hands; regenerate with `python -m dexguitar.world.hands`. -->',
              '  <compiler angle="radian"/>',
              '  <default>',
-             f'    <default class="hand">',
+             '    <default class="hand">',
              f'      <joint armature="{ARMATURE:g}" limited="true"/>',
              '      <geom type="capsule" contype="1" conaffinity="0" condim="3" friction="1 0.05 0.05" '
-             f'rgba="0.85 0.68 0.58 1" group="2"/>',
+             'rgba="0.85 0.68 0.58 1" group="2"/>',
              f'      <position kp="{KP:g}" ctrllimited="true"/>',
              '    </default>',
              '  </default>',

@@ -103,7 +103,8 @@ def guitar_xml(guitar: Guitar = GUITAR, mirror: bool | None = None) -> str:
     ]
     for k in range(1, g.n_frets + 1):
         y = g.fret_y[k]
-        lines.append(f'      <geom name="fret{k}" class="visual" type="box" pos="0 {y:.6g} {g.fretboard_z + 0.0009:.6g}" '
+        lines.append(f'      <geom name="fret{k}" class="visual" type="box" '
+                     f'pos="0 {y:.6g} {g.fretboard_z + 0.0009:.6g}" '
                      f'size="{float(g.neck_half_width(y)):.6g} 0.0006 0.0009" material="metal"/>')
     for i, (a, b) in enumerate(g.strings, start=1):
         lines.append(f'      <geom name="string{i}" class="visual" type="capsule" fromto="{f(a)} {f(b)}" '
@@ -133,7 +134,8 @@ def build_spec(scene: str = "duet", *, mirror: bool = False, visual: bool = True
     body = spec.body("guitar")
     if visual:
         spec.worldbody.add_light(pos=[0.0, 1.0, 2.5], dir=[0.0, -0.4, -1.0], diffuse=[0.8, 0.8, 0.8])
-        spec.worldbody.add_camera(name="front", pos=[-0.1, 0.75, 1.0], xyaxes=[1, 0, 0, 0, 0.15, 1])
+        # in front of the player, looking back at the guitar (image right = world -x)
+        spec.worldbody.add_camera(name="front", pos=[-0.15, 0.8, 1.0], xyaxes=[-1, 0, 0, 0, -0.2, 1])
     for role in SCENES[scene]:
         model_side = role if not mirror else ("right" if role == "left" else "left")
         hand = mujoco.MjSpec.from_string(H.hand_xml(model_side, role))
