@@ -4,6 +4,8 @@
   dexguitar song info FILE|NAME... [--json] tempo, notes, chords, seconds, frames, frets
   dexguitar song convert IN OUT.json       write the authors' JSON tab format
   dexguitar bench env --hand left --envs N  env throughput (control and physics steps/s)
+  dexguitar motion info|render MOTION      reference motions
+  dexguitar train / eval / plot            one hand: PPO + imitation; F1 by the paper's rules; curves
   dexguitar check                          the main job until trained policies ship: songs + every scene steps
 """
 from __future__ import annotations
@@ -255,6 +257,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true")
     p.add_argument("--notes", action="store_true", help="with --json: include the per-note rows")
     p.set_defaults(func=_eval)
+
+    from dexguitar.motion.cli import add_motion_commands
+    add_motion_commands(sub)
 
     p = sub.add_parser("plot", help="F1 against samples from runs' metrics.jsonl (needs the plot extra)")
     p.add_argument("runs", nargs="+", help="run directories or metrics.jsonl files")

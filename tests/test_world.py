@@ -125,6 +125,15 @@ def test_mirrored_scene_is_the_mirror_image_in_the_guitar_frame():
     for role in S.ROLES:
         np.testing.assert_allclose(poses[1][role][..., 0], -poses[0][role][..., 0], atol=1e-9)
         np.testing.assert_allclose(poses[1][role][..., 1:], poses[0][role][..., 1:], atol=1e-9)
+    # the picking role holds the pick whichever hand model plays it, and each role keeps its workspace (x mirrored)
+    m, mm = S.build_model("duet"), S.build_model("duet", mirror=True)
+    assert S.hand_index(mm, "right").pick >= 0
+    assert mujoco.mj_name2id(mm, mujoco.mjtObj.mjOBJ_GEOM, "rh_thumb3") in set(mm.pair_geom1)
+    for role in S.ROLES:
+        q, qm = S.hand_index(m, role).qpos[:3], S.hand_index(mm, role).qpos[:3]
+        (x0, x1), (mx0, mx1) = m.jnt_range[q[0]], mm.jnt_range[qm[0]]
+        assert (mx0, mx1) == (-x1, -x0)
+        np.testing.assert_array_equal(m.jnt_range[list(q[1:])], mm.jnt_range[list(qm[1:])])
 
 
 def test_lowered_fingertips_press_the_highest_fret():
