@@ -5,6 +5,7 @@
   dexguitar song convert IN OUT.json       write the authors' JSON tab format
   dexguitar bench env --hand left --envs N  env throughput (control and physics steps/s)
   dexguitar motion info|render MOTION      reference motions
+  dexguitar play --left L --right R --song S --out P   both hands (no synchronizer yet): MP4, WAV, report
   dexguitar train / eval / plot            one hand: PPO + imitation; F1 by the paper's rules; curves
   dexguitar check                          the main job until trained policies ship: songs + every scene steps
 """
@@ -198,6 +199,11 @@ def _eval(args) -> int:
     return 0
 
 
+def _play(args) -> int:
+    from dexguitar.perform.play import main as play_main
+    return play_main(args.rest)
+
+
 def _plot(args) -> int:
     from dexguitar.perform.plots import plot_f1
     print("wrote", plot_f1(args.runs, args.out, args.labels))
@@ -261,6 +267,11 @@ def build_parser() -> argparse.ArgumentParser:
     from dexguitar.motion.cli import add_motion_commands
     add_motion_commands(sub)
 
+    p = sub.add_parser("play", help="both hands play a song: MP4 (or PNG strip), WAV and a per-note report",
+                       add_help=False)
+    p.add_argument("rest", nargs=argparse.REMAINDER, help="--left DIR --right DIR --song S --out PREFIX ...")
+    p.set_defaults(func=_play)
+
     p = sub.add_parser("plot", help="F1 against samples from runs' metrics.jsonl (needs the plot extra)")
     p.add_argument("runs", nargs="+", help="run directories or metrics.jsonl files")
     p.add_argument("--out", required=True)
@@ -277,6 +288,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     from dexguitar.music.song import SongError
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ["play"]:                 # its own parser (perform.play.main), --help included
+        return _play(argparse.Namespace(rest=argv[1:]))
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)

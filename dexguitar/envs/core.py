@@ -70,7 +70,7 @@ class Window:
     dur: jnp.ndarray       # int32 (W,)
     n: jnp.ndarray         # int32 ()
     song: jnp.ndarray      # int32 () index of the song in the batch
-    first: jnp.ndarray     # int32 () song note index of row `lead` (row 0 is a rest in training windows)
+    first: jnp.ndarray     # int32 () song note index of row 1 (row 0 is the grace rest)
 
 
 @struct.dataclass
@@ -175,7 +175,8 @@ class GuitarEnv:
 
     # ------------------------------------------------------------------------ windows
     def sample_window(self, key, song=None) -> Window:
-        """Training: a rest + n-1 notes from a random song, augmented. Sequential: song `song` from its start."""
+        """Training: a rest + n-1 notes from a random song, augmented. Sequential: a rest, then song `song` from
+        its start (the authors' grace rest: the first note is not judged before the hand has had time to move)."""
         cfg, s = self.config, self.songs
         W = self.window_capacity
         k_song, k_len, k_start, k_shift, k_tempo, k_p1, k_p2 = jax.random.split(key, 7)
@@ -183,7 +184,7 @@ class GuitarEnv:
             song = jax.random.categorical(k_song, self._song_logits)
         song = jnp.asarray(song, jnp.int32)
         n_song = s.n_notes[song]
-        lead = 0 if cfg.sequential else 1                           # row 0 of a training window is the rest
+        lead = 1                                                    # row 0 of every window is the rest
         if cfg.sequential:
             n, start = n_song, jnp.int32(0)
         else:
@@ -217,10 +218,10 @@ class GuitarEnv:
             offset = jnp.where(jnp.any(pressed), offset, 0)
             left = jnp.where(left > 0, left + offset, left)
             frets = jnp.where(frets > 0, frets + offset, frets)
-            rest = lambda x, v: jnp.concatenate([jnp.full((1,) + x.shape[1:], v, x.dtype), x])  # noqa: E731
-            left, pick, frets = rest(left, 0), rest(pick, False), rest(frets, -1)
-            dur = rest(dur, cfg.rest_frames)
-            n = n + 1
+        rest = lambda x, v: jnp.concatenate([jnp.full((1,) + x.shape[1:], v, x.dtype), x])  # noqa: E731
+        left, pick, frets = rest(left, 0), rest(pick, False), rest(frets, -1)
+        dur = rest(dur, cfg.rest_frames)
+        n = n + 1
         if cfg.fill_strum_gaps:
             i = jnp.arange(N_STRINGS)
             first = jnp.min(jnp.where(pick, i, N_STRINGS), axis=1, keepdims=True)
@@ -378,7 +379,7 @@ class GuitarEnv:
         scores = M.close(tally, window.dur[rows[0]], goal_left, targets if "right" in self.roles else None)
         info = self.empty_info()
         info.update(press=out["press"], note_end=note_end & (note < window.n), song=window.song,
-                    song_note=window.first + note - (0 if cfg.sequential else 1))
+                    song_note=window.first + note - 1)
         if "picks" in out:
             info["picks"] = out["picks"]
         for hand, value in scores.items():

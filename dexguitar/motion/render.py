@@ -128,6 +128,7 @@ class MotionRenderer:
         self._ctx.make_current()
         d.qpos[self.qadr] = self.qpos[t]
         mujoco.mj_kinematics(m, d)
+        mujoco.mj_camlight(m, d)           # fixed cameras (e.g. "front") follow from the kinematics
         mujoco.mjv_updateScene(m, d, self._opt, self._pert, self.camera, mujoco.mjtCatBit.mjCAT_ALL, self._scene)
         rect = mujoco.MjrRect(0, 0, self.width, self.height)
         mujoco.mjr_render(rect, self._scene, self._con)

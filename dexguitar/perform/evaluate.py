@@ -36,7 +36,9 @@ def note_scores(info, song, hands) -> list[dict]:
     ends = np.asarray(info["note_end"])
     rows = []
     for t in np.flatnonzero(ends):
-        i = int(np.asarray(info["song_note"])[t])
+        i = int(np.asarray(info["song_note"])[t])           # -1: the grace rest before the song
+        if i < 0 and all(np.asarray(info[h])[t, 4] == 0 for h in hands):
+            continue                                           # a clean grace rest says nothing
         note = song.notes[i] if 0 <= i < len(song.notes) else None
         row = {"note": i, "frame": int(t), "frets": list(note.frets) if note else None,
                "chord": bool(note and note.is_chord), "rest": bool(note and note.is_rest)}

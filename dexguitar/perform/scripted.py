@@ -722,7 +722,7 @@ class ScriptedPlayer:
             t0 = time.time()
             window = self.env.sample_window(jax.random.PRNGKey(0), int(i))
             plans.append(self.plan(window))
-            out.append({"frames": len(plans[-1]), "notes": int(window.n), "plan_s": time.time() - t0})
+            out.append({"frames": len(plans[-1]), "notes": int(window.n) - 1, "plan_s": time.time() - t0})  # no rest
         T = max(len(p) for p in plans)
         acts = np.stack([np.concatenate([p, np.repeat(p[-1:], T - len(p), 0)]) for p in plans])
         t0 = time.time()
@@ -730,7 +730,7 @@ class ScriptedPlayer:
         roll = time.time() - t0
         hands = [h for h in ("left", "right", "both") if h in self.roles or (h == "both" and len(self.roles) == 2)]
         for b, res in enumerate(out):
-            end = info["note_end"][b, :res["frames"]]
+            end = info["note_end"][b, :res["frames"]] & (info["song_note"][b, :res["frames"]] >= 0)  # song notes
             res["roll_s"] = roll
             for h in hands:
                 per = info[h][b, :res["frames"]][end]

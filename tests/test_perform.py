@@ -1,0 +1,276 @@
+"""Performance output: string synthesis pitch, the audio mix, string colours, WAV files, per-note verdicts, the duet
+observation split and (when an offscreen GL is there) rendering. No env rollout: everything runs on hand-made data."""
+import numpy as np
+import pytest
+
+from dexguitar.perform import audio as A
+from dexguitar.perform import colors as C
+from dexguitar.world.guitar import GUITAR
+
+FS = 44100
+
+
+def fundamental(x, fs=FS):
+    """Fundamental of a harmonic sound: the lowest spectral peak within 20 dB of the strongest (a low string's
+    harmonics can beat its fundamental), refined by parabolic interpolation on the log magnitude."""
+    x = (x - x.mean()) * np.hanning(len(x))
+    n = 1 << 20
+    mag = np.abs(np.fft.rfft(x, n))
+    lo = int(40 * n / fs)
+    strong = mag >= 0.1 * mag[lo:].max()
+    peaks = [k for k in range(lo, len(mag) - 1) if strong[k] and mag[k] >= mag[k - 1] and mag[k] >= mag[k + 1]]
+    k = peaks[0]
+    a, b, c = np.log(mag[k - 1:k + 2])
+    return (k + 0.5 * (a - c) / (a - 2 * b + c)) * fs / n
+
+
+@pytest.mark.parametrize("string,fret", [(5, 0), (1, 12), (6, 0), (3, 7), (1, 22)])
+def test_pluck_pitch_within_one_percent(string, fret):
+    f = GUITAR.frequency(string, fret)
+    x = A.pluck(f, 1.0, FS)
+    assert x.shape == (FS,) and x.dtype == np.float32
+    assert np.max(np.abs(x)) == pytest.approx(1.0, abs=1e-3)
+    assert fundamental(x) == pytest.approx(f, rel=0.01)
+    assert np.abs(x[-2000:]).max() < np.abs(x[:2000]).max()          # it decays
+
+
+def test_pluck_reference_pitches():
+    assert A.string_frequency(5, 0) == pytest.approx(110.0)
+    assert A.string_frequency(1, 12) == pytest.approx(659.255, abs=0.01)
+    assert fundamental(A.pluck(659.255, 1.0)) == pytest.approx(659.255, rel=0.002)
+
+
+def test_render_audio_onsets_and_silence():
+    first = A.render_audio([(0.25, 1, 0)], 1.0, FS)
+    both = A.render_audio([(0.25, 1, 0), (0.5, 5, 3)], 1.0, FS)
+    assert both.shape == (FS,)
+    on1, on2 = int(0.25 * FS), int(0.5 * FS)
+    assert np.all(both[:on1] == 0)                                       # silence before the first pick
+    assert np.abs(both[on1:on1 + 50]).max() > 0.05                        # sound right at it
+    assert np.array_equal(both[:on2], first[:on2])                       # the second note starts at 0.5 s ...
+    assert np.abs(both[on2:on2 + 50] - first[on2:on2 + 50]).max() > 0.05  # ... and not later
+    assert np.abs(both).max() < 1.0
+
+
+def test_render_audio_repick_and_mute_cut_the_string():
+    x = A.render_audio([(0.0, 2, 1), (0.5, 2, -1)], 1.0, FS)             # fret -1 silences the string
+    assert np.abs(x[: FS // 4]).max() > 0.05
+    assert np.all(x[FS // 2:] == 0)
+
+
+def test_events_from_info():
+    press = np.zeros((20, 6), int)
+    picks = np.zeros((20, 6), bool)
+    press[:, 1] = 3
+    picks[2, 1] = True                  # string 2 picked at fret 3
+    picks[5, 0] = True                  # string 1 open
+    press[10:, 1] = 5                   # slide to fret 5 while ringing: a softer restart
+    press[12, 0] = 2                    # a one-frame flicker on string 1: ignored
+    ev = A.events_from_info({"press": press, "picks": picks}, fps=60)
+    assert [(round(e.time * 60), e.string, e.fret, e.amplitude) for e in ev] == [
+        (3, 2, 3, 1.0), (6, 1, 0, 1.0), (11, 2, 5, 0.4)]
+    assert A.events_from_info({"press": press, "picks": picks}, legato=False)[-1].fret == 0
+
+
+def test_wav_round_trip(tmp_path):
+    x = np.sin(2 * np.pi * 440 * np.arange(4410) / FS).astype(np.float32) * 0.5
+    path = A.write_wav(tmp_path / "a.wav", x, FS)
+    import wave
+    with wave.open(str(path)) as w:
+        assert (w.getnchannels(), w.getsampwidth(), w.getframerate(), w.getnframes()) == (1, 2, FS, 4410)
+    y, rate = A.read_wav(path)
+    assert rate == FS and np.abs(y - x).max() < 1.0 / 32767 + 1e-6
+    A.write_wav(tmp_path / "clip.wav", np.array([2.0, -2.0]), FS)          # clipped, not wrapped
+    assert np.allclose(A.read_wav(tmp_path / "clip.wav")[0], [1.0, -1.0])
+
+
+# ------------------------------------------------------------------------------------------------ colours
+
+def test_string_colors_rule():
+    goal = np.array([-1, 3, 0, 0, 0, 0])        # string 1 open, string 2 at fret 3
+    targets = np.array([1, 1, 0, 0, 0, 0], bool)
+    press = np.array([0, 3, 0, 0, 0, 0])
+    no = np.zeros(6, bool)
+    names = C.color_names(C.string_colors(goal, targets, press, no, no))
+    assert names == ["yellow", "yellow", "grey", "grey", "grey", "grey"]
+    names = C.color_names(C.string_colors(goal, targets, np.array([2, 2, 0, 0, 0, 0]), no, no))
+    assert names[:2] == ["grey", "grey"]        # pressed where it should ring open / at the wrong fret
+
+
+def test_rollout_colors_sequence():
+    # note 0: string 2 at fret 3 (target); note 1: string 1 open (target)
+    goal_rows = np.array([[0, 3, 0, 0, 0, 0], [-1, 0, 0, 0, 0, 0]])
+    pick_rows = np.array([[0, 1, 0, 0, 0, 0], [1, 0, 0, 0, 0, 0]], bool)
+    T = 8
+    press, picks = np.zeros((T, 6), int), np.zeros((T, 6), bool)
+    note = np.array([0, 0, 0, 0, 1, 1, 1, 1])
+    press[1:4, 1] = 3                   # pressed right from step 1
+    picks[2, 1] = True                  # picked while pressed: green
+    picks[3, 3] = True                  # a string that is no target: red
+    press[5, 0] = 2                     # note 1: string 1 pressed though it should ring open ...
+    picks[5, 0] = True                  # ... and picked: red
+    picks[6, 0] = True                  # picked again: still red
+    names = [C.color_names(c) for c in C.rollout_colors(press, picks, note, goal_rows, pick_rows)]
+    assert names[0][1] == "grey"                         # target, not pressed yet
+    assert names[1][1] == "yellow"                       # pressed right, waiting for the pick
+    assert names[2][1] == "green" and names[3][1] == "green"
+    assert names[3][3] == "red"
+    assert names[4][:4] == ["yellow", "grey", "grey", "grey"]   # new note: reset (open string 1 ready)
+    assert names[5][0] == "red" and names[6][0] == "red" and names[7][0] == "red"
+
+
+def test_second_pick_turns_green_red():
+    goal, targets, press = np.array([-1, 0, 0, 0, 0, 0]), np.array([1, 0, 0, 0, 0, 0], bool), np.zeros(6, int)
+    picked, ok = C.update_so_far(np.zeros(6, bool), np.zeros(6, bool), targets, goal, targets, press)
+    assert C.color_names(C.string_colors(goal, targets, press, picked, ok))[0] == "green"
+    picked, ok = C.update_so_far(picked, ok, targets, goal, targets, press)
+    assert C.color_names(C.string_colors(goal, targets, press, picked, ok))[0] == "red"
+
+
+# ------------------------------------------------------------------------------------------------ play
+
+def test_split_obs_matches_hand_layout():
+    import jax.numpy as jnp
+
+    from dexguitar.perform.play import joint_act, split_obs
+    hist = np.arange(2 * 416, dtype=np.float32).reshape(2, 416)     # frame-major, left 208 first in each frame
+    goal_l, goal_r = np.full(35, -1.0, np.float32), np.full(35, -2.0, np.float32)
+    obs = jnp.asarray(np.concatenate([hist.reshape(-1), goal_l, goal_r]))
+    left, right = split_obs(obs)
+    assert np.array_equal(left, np.concatenate([hist[:, :208].reshape(-1), goal_l]))
+    assert np.array_equal(right, np.concatenate([hist[:, 208:].reshape(-1), goal_r]))
+    batch = split_obs(jnp.stack([obs, obs]))[1]
+    assert batch.shape == (2, 451) and np.array_equal(batch[1], right)
+    act = joint_act(lambda o: o[..., :27], lambda o: o[..., -27:])
+    assert np.array_equal(act(obs), np.concatenate([left[:27], right[-27:]]))
+
+
+def hand_made_performance():
+    """A 4-note song and a recording of it: right, late, picked before the press, rest."""
+    from dexguitar.music.song import Song, make_note
+    X = -1
+    song = Song(120, [make_note("1/4", [0, X, X, X, X, X]), make_note("1/4", [X, 3, X, X, X, X]),
+                      make_note("1/4", [X, 1, X, X, X, X]), make_note("1/4", [X, X, X, X, X, X])])
+    # window rows: the env's 5-frame grace rest (song note -1), then the song's 4 notes of 30 frames
+    dur = np.array([5, 30, 30, 30, 30])
+    onset = np.concatenate([[0], np.cumsum(dur)])
+    T = int(onset[-1])
+    row = np.repeat(np.arange(5), dur)
+    rec = {"press": np.zeros((T, 6), int), "picks": np.zeros((T, 6), bool), "song_note": row - 1, "row": row,
+           "note_end": np.zeros(T, bool),
+           "goal_left": np.array([[0] * 6, [-1, 0, 0, 0, 0, 0], [0, 3, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0] * 6]),
+           "pick": np.array([[0] * 6, [1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0] * 6], bool),
+           "dur": dur, "onset": onset}
+    for h in ("left", "right", "both"):
+        rec[h] = np.zeros((T, 6), np.float32)
+    rec["note_end"][onset[1:] - 1] = True
+    perfect, zero, rest = [1, 1, 1, 1, 1, 1], [0, 0, 0, 0, 1, 1], [1, 1, 1, 0, 0, 0]
+    for t in (4, 124):                                               # the grace rest and the song's rest
+        rec["both"][t] = rec["right"][t] = rec["left"][t] = rest
+    rec["picks"][5 + 2, 0] = True                                    # note 0: right
+    rec["both"][34], rec["right"][34], rec["left"][34] = perfect, perfect, rest
+    rec["press"][40:65, 1] = 3                                       # note 1: pressed early, picked at frame 15
+    rec["picks"][50, 1] = True
+    rec["both"][64], rec["right"][64], rec["left"][64] = zero, perfect, perfect
+    rec["press"][70:95, 1] = 1                                       # note 2: picked at frame 2, pressed at 5
+    rec["picks"][67, 1] = True
+    rec["both"][94], rec["right"][94], rec["left"][94] = zero, zero, perfect
+    return song, rec
+
+
+def test_note_verdicts():
+    from dexguitar.perform.play import note_verdicts, render_colors
+    song, rec = hand_made_performance()
+    rows = note_verdicts(rec, song)
+    assert [r["note"] for r in rows] == [0, 1, 2, 3]          # a clean grace rest is not reported
+    assert [r["verdict"] for r in rows] == ["right", "late", "wrong", "rest"]
+    assert rows[2]["why"] == "picked before the press" and rows[2]["picked"] == [2]
+    assert rows[1]["first_pick"] == 15 and rows[1]["onset_frame"] == 35
+    names = [C.color_names(c) for c in render_colors(rec)]
+    assert names[7][0] == "green" and names[49][1] == "yellow" and names[50][1] == "green"
+    assert names[67][1] == "red" and names[66][1] == "grey"
+
+
+def test_perform_writes_outputs_without_ffmpeg(tmp_path, monkeypatch):
+    """perform end to end on the hand-made recording (no rollout): PNG sheet, WAV and JSON report."""
+    import json
+
+    from dexguitar.perform import play as P
+    from dexguitar.world import scene as S
+    song, rec = hand_made_performance()
+    T = len(rec["press"])
+    rec.update(qpos=np.tile(S.build_model("duet").key_qpos[0], (T, 1)), frames=T, rollout_seconds=0.0)
+    monkeypatch.setattr(P, "play", lambda *a, **k: rec)
+    try:
+        report = P.perform(song, out_prefix=tmp_path / "perf", act=lambda obs: obs, video=False, quiet=True)
+    except RuntimeError as err:
+        pytest.skip(f"no offscreen OpenGL: {err}")
+    assert report["counts"] == {"right": 1, "late": 1, "wrong": 1, "rest": 1}
+    assert report["summary"]["both"]["f1"] == pytest.approx(1 / 3)
+    saved = json.loads((tmp_path / "perf-report.json").read_text())
+    assert saved["counts"] == report["counts"] and saved["files"]["frames"].endswith("perf.png")
+    x, rate = A.read_wav(tmp_path / "perf.wav")
+    assert len(x) == round(T / 60 * rate) and np.all(x[: int(7 / 60 * rate)] == 0) and np.abs(x).max() > 0.05
+    assert "late" in P.format_report(report)
+
+
+# ------------------------------------------------------------------------------------------------ rendering
+
+@pytest.fixture(scope="module")
+def duet_model():
+    from dexguitar.world import scene as S
+    return S.build_spec("duet", visual=True).compile()
+
+
+def test_render_frames_png_colours_strings(tmp_path, duet_model):
+    from dexguitar.motion.render import png_size
+    from dexguitar.perform.video import SceneRenderer, render_frames_png
+    q = np.tile(duet_model.key_qpos[0], (2, 1))
+    grey = np.tile(C.GREY, (6, 1))
+    try:
+        with SceneRenderer(duet_model, 160, 90) as r:
+            plain, red = r.frame(q[0], grey), r.frame(q[0], np.tile(C.RED, (6, 1)))
+    except RuntimeError as err:
+        pytest.skip(f"no offscreen OpenGL: {err}")
+    assert plain.std() > 5                                            # the scene, not a blank (camera) image
+    diff = np.abs(red.astype(int) - plain.astype(int)).sum(-1) > 30
+    assert diff.any()                                                  # the strings take the colour
+    redness = red[diff][:, 0].astype(int) - red[diff][:, 1:].max(-1)
+    assert np.mean(redness > 0) > 0.8
+    out = render_frames_png(duet_model, q, np.stack([grey, grey]), tmp_path / "s.png", frames=2, columns=2,
+                            width=64, height=48)
+    assert png_size(out) == (128, 48)
+    assert (duet_model.geom_matid >= 0).sum() > 0 and duet_model.geom_rgba.shape[1] == 4   # model given back
+
+
+def test_render_video_needs_ffmpeg_or_says_so(tmp_path, duet_model, monkeypatch):
+    import builtins
+
+    from dexguitar.perform import video as V
+    real = builtins.__import__
+
+    def no_ffmpeg(name, *a, **k):
+        if name == "imageio_ffmpeg":
+            raise ImportError(name)
+        return real(name, *a, **k)
+    monkeypatch.setattr(builtins, "__import__", no_ffmpeg)
+    q = duet_model.key_qpos[:1]
+    with pytest.raises(RuntimeError, match="pip install imageio-ffmpeg"):
+        V.render_video(duet_model, q, None, tmp_path / "v.mp4")
+
+
+def test_render_video_with_audio(tmp_path, duet_model):
+    imageio_ffmpeg = pytest.importorskip("imageio_ffmpeg")
+    import subprocess
+
+    from dexguitar.perform import video as V
+    wav = A.write_wav(tmp_path / "a.wav", A.render_audio([(0.0, 1, 0)], 0.1), FS)
+    q = np.tile(duet_model.key_qpos[0], (6, 1))
+    try:
+        out = V.render_video(duet_model, q, np.tile(C.GREEN, (6, 6, 1)), tmp_path / "v.mp4", fps=60, audio=wav,
+                             width=64, height=48)
+    except RuntimeError as err:
+        pytest.skip(f"no offscreen OpenGL: {err}")
+    probe = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-i", str(out)], check=False,
+                           capture_output=True, text=True).stderr
+    assert "Video: h264" in probe and "Audio: aac" in probe
