@@ -13,18 +13,25 @@ OUT ?= runs
 $(STAMP): pyproject.toml
 	$(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q -e ".[dev]"
+	$(BIN)/python -m pip install -q -e ".[dev,video,plot]"
+	@# offscreen OpenGL for rendering (OSMesa or EGL); installed from Debian's packages when missing and possible
+	@$(PY) -c "import ctypes.util as u, sys; sys.exit(0 if u.find_library('OSMesa') or u.find_library('EGL') else 1)" \
+	  || (command -v apt-get >/dev/null && [ "$$(id -u)" = 0 ] && (apt-get update -qq && apt-get install -y -qq libosmesa6) >/dev/null) \
+	  || echo "warning: no offscreen OpenGL (install libosmesa6 or libegl1): videos cannot be rendered"
 	touch $(STAMP)
 
 setup: $(STAMP)                ## make the virtual environment and install the package
 
-demo: $(STAMP)                 ## the main job on the embedded defaults
-	$(BIN)/dexguitar check
+demo: $(STAMP)                 ## the main job: the shipped policies play an embedded song -> out/demo.mp4, .wav, report
+	$(BIN)/dexguitar song list
+	$(BIN)/dexguitar play --left models/policies/left_ode_to_joy --right models/policies/right_patterns \
+	  --song ode_to_joy --seconds 20 --out out/demo
 
 test: $(STAMP)                 ## the CPU test suite
 	JAX_PLATFORMS=cpu $(BIN)/python -m pytest
 
-check: demo
+check: $(STAMP)                ## every scene steps in MJX (4 envs, jit + vmap)
+	$(BIN)/dexguitar check
 
 train-left: $(STAMP)           ## make train-left SONG="ode_to_joy twinkle" (files, names or a folder); RESUME=1 continues
 	$(BIN)/dexguitar train --hand left --song $(SONG) --config $(CONFIG_LEFT) --out $(OUT)/left-$(firstword $(notdir $(SONG))) $(if $(RESUME),--resume)
