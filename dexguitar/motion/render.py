@@ -70,6 +70,53 @@ def _gl_context(width: int, height: int):
                        "(Debian/Ubuntu) or an EGL driver, or set MUJOCO_GL=egl|osmesa.")
 
 
+class Offscreen:
+    """MuJoCo's renderer on an offscreen GL context: pixels of a model's data seen from a camera. Shared by the
+    motion strips and the performance videos. `fast`: no shadows (software GL spends most of a frame on them)."""
+
+    def __init__(self, model: mujoco.MjModel, width: int, height: int, fast: bool = False):
+        model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
+        model.vis.global_.offheight = max(model.vis.global_.offheight, height)
+        self.model, self.width, self.height = model, width, height
+        self._ctx = _gl_context(width, height)
+        self._con = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_100)
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._con)
+        self._scene = mujoco.MjvScene(model, maxgeom=2000)
+        if fast:
+            self._scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
+        self._opt = mujoco.MjvOption()
+        self._pert = mujoco.MjvPerturb()
+
+    def render(self, data: mujoco.MjData, camera: mujoco.MjvCamera) -> np.ndarray:
+        """(H, W, 3) uint8 image of `data` after its kinematics (the hands' state is their qpos)."""
+        m = self.model
+        self._ctx.make_current()
+        mujoco.mj_kinematics(m, data)
+        mujoco.mj_camlight(m, data)                # fixed cameras and lights follow from the kinematics
+        mujoco.mjv_updateScene(m, data, self._opt, self._pert, camera, mujoco.mjtCatBit.mjCAT_ALL, self._scene)
+        rect = mujoco.MjrRect(0, 0, self.width, self.height)
+        mujoco.mjr_render(rect, self._scene, self._con)
+        rgb = np.empty((self.height, self.width, 3), np.uint8)
+        mujoco.mjr_readPixels(rgb, None, rect, self._con)
+        return np.flipud(rgb)
+
+    def close(self):
+        if self._ctx is not None:
+            self._con.free()
+            self._ctx.free()
+            self._ctx = None
+
+
+def fixed_camera(model: mujoco.MjModel, name: str) -> mujoco.MjvCamera:
+    cid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, name)
+    if cid < 0:
+        raise ValueError(f"no camera {name!r} in the scene")
+    camera = mujoco.MjvCamera()
+    camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
+    camera.fixedcamid = cid
+    return camera
+
+
 class MotionRenderer:
     """Renders frames of one motion's scene. `camera`: "hand" (a free camera looking at the motion's mean wrist
     position) or the name of a scene camera ("front")."""
@@ -80,8 +127,6 @@ class MotionRenderer:
         self.motion = motion
         self.model = S.build_spec(motion.hand, mirror=mirror, visual=True).compile()
         m = self.model
-        m.vis.global_.offwidth = max(m.vis.global_.offwidth, width)
-        m.vis.global_.offheight = max(m.vis.global_.offheight, height)
         m.vis.headlight.ambient[:] = 0.35
         m.vis.headlight.diffuse[:] = 0.6
         self.width, self.height = width, height
@@ -90,12 +135,7 @@ class MotionRenderer:
         kin = K.hand_kinematics(motion.hand, mirror)
         self.qpos = kin.model_qpos(motion)
         self.qadr = np.asarray(S.hand_index(m, motion.hand).qpos)
-        self._ctx = _gl_context(width, height)
-        self._con = mujoco.MjrContext(m, mujoco.mjtFontScale.mjFONTSCALE_100)
-        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._con)
-        self._scene = mujoco.MjvScene(m, maxgeom=2000)
-        self._opt = mujoco.MjvOption()
-        self._pert = mujoco.MjvPerturb()
+        self._screen = Offscreen(m, width, height)
         self.camera = mujoco.MjvCamera()
         if camera == "hand":
             wrist = S.hand_index(m, motion.hand).key_bodies[0]
@@ -116,31 +156,15 @@ class MotionRenderer:
             self.camera.azimuth = float(np.degrees(np.arctan2(fwd[1], fwd[0])))
             self.camera.elevation = float(np.degrees(np.arcsin(fwd[2])))
         else:
-            cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, camera)
-            if cid < 0:
-                raise ValueError(f"no camera {camera!r} in the scene (use 'hand' or 'front')")
-            self.camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
-            self.camera.fixedcamid = cid
+            self.camera = fixed_camera(m, camera)
 
     def frame(self, t: int) -> np.ndarray:
         """(H, W, 3) uint8 image of motion frame t."""
-        m, d = self.model, self.data
-        self._ctx.make_current()
-        d.qpos[self.qadr] = self.qpos[t]
-        mujoco.mj_kinematics(m, d)
-        mujoco.mj_camlight(m, d)           # fixed cameras (e.g. "front") follow from the kinematics
-        mujoco.mjv_updateScene(m, d, self._opt, self._pert, self.camera, mujoco.mjtCatBit.mjCAT_ALL, self._scene)
-        rect = mujoco.MjrRect(0, 0, self.width, self.height)
-        mujoco.mjr_render(rect, self._scene, self._con)
-        rgb = np.empty((self.height, self.width, 3), np.uint8)
-        mujoco.mjr_readPixels(rgb, None, rect, self._con)
-        return np.flipud(rgb)
+        self.data.qpos[self.qadr] = self.qpos[t]
+        return self._screen.render(self.data, self.camera)
 
     def close(self):
-        if self._ctx is not None:
-            self._con.free()
-            self._ctx.free()
-            self._ctx = None
+        self._screen.close()
 
     def __enter__(self):
         return self

@@ -2,7 +2,7 @@
 MP4 with the synthesized audio, or a PNG contact sheet when no ffmpeg is around.
 
 Why this way: MuJoCo's own OpenGL renderer on the visual scene needs nothing beyond MuJoCo and an offscreen GL
-(OSMesa or EGL, chosen by `motion.render._gl_context`); only the kinematics are recomputed per frame (the recorded
+(OSMesa or EGL, through `motion.render.Offscreen`); only the kinematics are recomputed per frame (the recorded
 qpos is the whole state of the weightless hands). The string geoms lose their material so `geom_rgba` shows, and
 are drawn thicker than the real ones (`string_radius`: sub-millimetre strings are a pixel wide in a 640 x 360
 frame). MP4 writing
@@ -16,7 +16,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from dexguitar.motion.render import _gl_context, strip_frames, write_png
+from dexguitar.motion.render import Offscreen, fixed_camera, strip_frames, write_png
 
 N_STRINGS = 6
 
@@ -28,8 +28,6 @@ class SceneRenderer:
     def __init__(self, model: mujoco.MjModel, width: int = 640, height: int = 360, camera: str = "front",
                  string_radius: float = 0.0015, fast: bool = True):
         m = model
-        m.vis.global_.offwidth = max(m.vis.global_.offwidth, width)
-        m.vis.global_.offheight = max(m.vis.global_.offheight, height)
         self.model, self.width, self.height = m, width, height
         self.strings = []
         for i in range(1, N_STRINGS + 1):
@@ -45,47 +43,25 @@ class SceneRenderer:
         self.data = mujoco.MjData(m)
         if m.nkey:
             mujoco.mj_resetDataKeyframe(m, self.data, 0)
-        cid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_CAMERA, camera)
-        if cid < 0:
-            raise ValueError(f"no camera {camera!r} in the model")
-        self.camera = mujoco.MjvCamera()
-        self.camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
-        self.camera.fixedcamid = cid
+        self.camera = fixed_camera(m, camera)
         # Software GL (OSMesa) spends most of a frame on shadow maps and multisampling: off unless asked for.
         self._saved_quality = (m.vis.quality.offsamples, m.vis.quality.shadowsize)
         if fast:
             m.vis.quality.offsamples = 0
-        self._ctx = _gl_context(width, height)
-        self._con = mujoco.MjrContext(m, mujoco.mjtFontScale.mjFONTSCALE_100)
-        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._con)
-        self._scene = mujoco.MjvScene(m, maxgeom=2000)
-        if fast:
-            self._scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
-        self._opt = mujoco.MjvOption()
-        self._pert = mujoco.MjvPerturb()
+        self._screen = Offscreen(m, width, height, fast)
 
     def frame(self, qpos, colors=None) -> np.ndarray:
         """(H, W, 3) uint8 image of the pose `qpos` (nq,) with string colours (6, 4) (None: as they are)."""
-        m, d = self.model, self.data
-        self._ctx.make_current()
-        d.qpos[:] = qpos
-        mujoco.mj_kinematics(m, d)
-        mujoco.mj_camlight(m, d)                   # cameras and lights: mj_kinematics alone leaves them at 0
+        self.data.qpos[:] = qpos
         if colors is not None:
-            m.geom_rgba[self.strings] = np.asarray(colors, np.float32)
-        mujoco.mjv_updateScene(m, d, self._opt, self._pert, self.camera, mujoco.mjtCatBit.mjCAT_ALL, self._scene)
-        rect = mujoco.MjrRect(0, 0, self.width, self.height)
-        mujoco.mjr_render(rect, self._scene, self._con)
-        rgb = np.empty((self.height, self.width, 3), np.uint8)
-        mujoco.mjr_readPixels(rgb, None, rect, self._con)
-        return np.flipud(rgb)
+            self.model.geom_rgba[self.strings] = np.asarray(colors, np.float32)
+        return self._screen.render(self.data, self.camera)
 
     def close(self):
         """Free the GL context and give the model its string materials, colours and sizes back."""
-        if self._ctx is not None:
-            self._con.free()
-            self._ctx.free()
-            self._ctx = None
+        if self._screen is not None:
+            self._screen.close()
+            self._screen = None
             m = self.model
             m.geom_matid[self.strings], m.geom_rgba[self.strings], m.geom_size[self.strings] = self._saved
             m.vis.quality.offsamples = self._saved_quality[0]
