@@ -33,8 +33,9 @@ test: $(STAMP)                 ## the CPU test suite
 check: $(STAMP)                ## every scene steps in MJX (4 envs, jit + vmap)
 	$(BIN)/dexguitar check
 
-train-left: $(STAMP)           ## make train-left SONG="ode_to_joy twinkle" (files, names or a folder); RESUME=1 continues
-	$(BIN)/dexguitar train --hand left --song $(SONG) --config $(CONFIG_LEFT) --out $(OUT)/left-$(firstword $(notdir $(SONG))) $(if $(RESUME),--resume)
+train-left: $(STAMP)           ## make train-left SONG="ode_to_joy twinkle" [MOTION=retargeted.npz] [RESUME=1]
+	$(BIN)/dexguitar train --hand left --song $(SONG) --config $(CONFIG_LEFT) \
+	  --out $(OUT)/left-$(firstword $(notdir $(SONG))) $(if $(MOTION),--motion $(MOTION)) $(if $(RESUME),--resume)
 
 train-right: $(STAMP)          ## procedural picking and strumming patterns
 	$(BIN)/dexguitar train --hand right --config $(CONFIG_RIGHT) --out $(OUT)/right $(if $(RESUME),--resume)
