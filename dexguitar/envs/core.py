@@ -287,23 +287,19 @@ class GuitarEnv:
         valid = j < state_window.n
         return jnp.minimum(j, self.window_capacity - 1), valid
 
-    def timers(self, window, note, note_frame):
-        rows, valid = self.current_rows(window, note)
+    def timers(self, window, rows, valid, note_frame):
+        """Timer codes: frames left in the current note, then the upcoming notes' full durations."""
         frames = jnp.where(valid, window.dur[rows], 0).at[0].add(-note_frame)
         return TL.timer_code(jnp.where(valid, frames, 0))
 
     def left_goal(self, window, note, note_frame):
         rows, valid = self.current_rows(window, note)
-        k = jnp.where(valid[:, None], window.left[rows], 0).astype(jnp.float32)
-        code = jnp.where(k > 0, k / N_FRETS, k)
-        return jnp.concatenate([code, self.timers(window, note, note_frame)[:, None]], axis=1).reshape(-1)
+        return TL.goal_vector(TL.fret_code(window.left[rows]), valid, self.timers(window, rows, valid, note_frame))
 
     def right_goal(self, window, note, note_frame, picked):
         rows, valid = self.current_rows(window, note)
-        flags = jnp.where(valid[:, None], window.pick[rows], False)
-        flags = flags.at[0].set(flags[0] & ~picked)
-        return jnp.concatenate([flags.astype(jnp.float32), self.timers(window, note, note_frame)[:, None]],
-                               axis=1).reshape(-1)
+        flags = window.pick[rows].at[0].set(window.pick[rows][0] & ~picked)
+        return TL.goal_vector(flags.astype(jnp.float32), valid, self.timers(window, rows, valid, note_frame))
 
     def goal(self, state) -> jnp.ndarray:
         raise NotImplementedError

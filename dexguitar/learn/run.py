@@ -96,8 +96,9 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
     return summary
 
 
-def load_config(path: str | None, **overrides) -> TrainConfig:
-    """A TrainConfig from an experiments/*.py file defining CONFIG (and optionally ENV), with overrides by name."""
+def load_config(path: str | None, **overrides):
+    """(TrainConfig, EnvConfig or None) from an experiments/*.py file defining CONFIG (and optionally ENV), with
+    TrainConfig fields overridden by name."""
     cfg, env = TrainConfig(), None
     if path:
         import runpy

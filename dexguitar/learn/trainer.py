@@ -194,6 +194,7 @@ class Trainer:
         cfg = self.config
         n = batch["obs"].shape[0]
         n_mb = max(n // cfg.minibatch, 1)
+        ts_norm = ts.obs_norm
 
         def loss_fn(params, mb):
             frames, goal = N.split_obs(mb["obs"], HISTORY, self.env.goal_size)
@@ -205,8 +206,6 @@ class Trainer:
             vl = jnp.mean(jnp.sum((v - mb["target"]) ** 2, -1)) / v.shape[-1]
             return pl + cfg.value_coef * vl, {"policy_loss": pl, "value_loss": vl, "clip_frac": clipped,
                                               "std": jnp.mean(jnp.exp(log_std))}
-
-        ts_norm = ts.obs_norm
 
         def epoch(carry, k):
             params, opt = carry
@@ -252,8 +251,7 @@ class Trainer:
         critic = ts.params["critic"]
         popart, kernel, bias = P.popart_update(ts.popart, returns, critic["params"]["value"]["kernel"],
                                                critic["params"]["value"]["bias"])
-        critic = jax.tree_util.tree_map(lambda x: x, critic)
-        critic["params"]["value"] = {"kernel": kernel, "bias": bias}
+        critic = {**critic, "params": {**critic["params"], "value": {"kernel": kernel, "bias": bias}}}
         frames, _ = N.split_obs(traj["obs"], HISTORY, self.env.goal_size)
         obs_norm = N.normalizer_update(ts.obs_norm, frames)
 

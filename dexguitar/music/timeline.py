@@ -224,7 +224,14 @@ def _window(tl: Timeline, frame):
     return rows, valid, timer_code(frames)
 
 
-def _goal(values, valid, timer) -> jax.Array:
+def fret_code(k) -> jax.Array:
+    """Left-hand goal value of a string: k > 0 -> k/22, open (-1) -> -1, don't care (0) -> 0."""
+    k = jnp.asarray(k, jnp.float32)
+    return jnp.where(k > 0, k / N_FRETS, k)
+
+
+def goal_vector(values, valid, timer) -> jax.Array:
+    """(5, 6) per-string values + (5,) timer codes -> the (35,) note-major goal; invalid notes are zeros."""
     values = jnp.where(valid[:, None], values, 0.0)
     return jnp.concatenate([values, timer[:, None]], axis=1).reshape(GOAL_SIZE).astype(jnp.float32)
 
@@ -237,8 +244,7 @@ def left_goal(tl: Timeline, frame) -> jax.Array:
     current note, slots 1-4 the note's full duration; see `timer_code`. Past the end: zeros and timer -1.
     """
     rows, valid, timer = _window(tl, frame)
-    k = tl.left[rows].astype(jnp.float32)
-    return _goal(jnp.where(k > 0, k / N_FRETS, k), valid, timer)
+    return goal_vector(fret_code(tl.left[rows]), valid, timer)
 
 
 def right_goal(tl: Timeline, frame, done=None) -> jax.Array:
@@ -248,7 +254,7 @@ def right_goal(tl: Timeline, frame, done=None) -> jax.Array:
     flags = tl.pick[rows]
     if done is not None:
         flags = flags.at[0].set(flags[0] & ~jnp.asarray(done, bool))
-    return _goal(flags.astype(jnp.float32), valid, timer)
+    return goal_vector(flags.astype(jnp.float32), valid, timer)
 
 
 # ------------------------------------------------------------------------------------------ augmentation (jit)
