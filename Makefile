@@ -4,10 +4,13 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: setup demo test check models clean train-left train-right eval plot
+.PHONY: setup demo test check models clean train-left train-right sync eval plot
 SONG ?= ode_to_joy
 CONFIG_LEFT ?= experiments/left_gpu.py
 CONFIG_RIGHT ?= experiments/right_gpu.py
+CONFIG_SYNC ?= experiments/sync_gpu.py
+LEFT ?= models/policies/left_$(SONG)
+RIGHT ?= models/policies/right_patterns
 OUT ?= runs
 
 $(STAMP): pyproject.toml
@@ -22,10 +25,9 @@ $(STAMP): pyproject.toml
 
 setup: $(STAMP)                ## make the virtual environment and install the package
 
-demo: $(STAMP)                 ## the main job: the shipped policies play an embedded song -> out/demo.mp4, .wav, report
+demo: $(STAMP)                 ## the main job: the shipped synchronized policies play a song -> out/demo.mp4, .wav, report
 	$(BIN)/dexguitar song list
-	$(BIN)/dexguitar play --left models/policies/left_ode_to_joy --right models/policies/right_patterns \
-	  --song ode_to_joy --seconds 20 --out out/demo
+	$(BIN)/dexguitar play --ckpt models/policies/sync_strum_g_c_d --song strum_g_c_d --out out/demo
 
 test: $(STAMP)                 ## the CPU test suite
 	JAX_PLATFORMS=cpu $(BIN)/python -m pytest
@@ -39,6 +41,10 @@ train-left: $(STAMP)           ## make train-left SONG="ode_to_joy twinkle" [MOT
 
 train-right: $(STAMP)          ## procedural picking and strumming patterns
 	$(BIN)/dexguitar train --hand right --config $(CONFIG_RIGHT) --out $(OUT)/right $(if $(RESUME),--resume)
+
+sync: $(STAMP)                 ## make sync SONG=strum_g_c_d [LEFT=dir] [RIGHT=dir] [RESUME=1]: both hands in time
+	$(BIN)/dexguitar sync --song $(SONG) --left $(LEFT) --right $(RIGHT) --config $(CONFIG_SYNC) \
+	  --out $(OUT)/sync-$(firstword $(notdir $(SONG))) $(if $(RESUME),--resume)
 
 eval: $(STAMP)                 ## make eval CKPT=models/policies/left_ode_to_joy SONG=ode_to_joy
 	$(BIN)/dexguitar eval --ckpt $(CKPT) --song $(SONG)

@@ -5,9 +5,10 @@
   dexguitar song convert IN OUT.json       write the authors' JSON tab format
   dexguitar bench env --hand left --envs N  env throughput (control and physics steps/s)
   dexguitar motion info|render MOTION      reference motions
-  dexguitar play --left L --right R --song S --out P   both hands (no synchronizer yet): MP4, WAV, report
+  dexguitar play --left L --right R | --ckpt SYNC --song S --out P   both hands: MP4, WAV, report
   dexguitar train / eval / plot            one hand: PPO + imitation; F1 by the paper's rules; curves
-  dexguitar check                          the main job until trained policies ship: songs + every scene steps
+  dexguitar sync --song S --left L --right R --out DIR   synchronize both hands; F1 before and after
+  dexguitar check                          the embedded songs, and every scene steps in MJX
 """
 from __future__ import annotations
 
@@ -132,9 +133,22 @@ def _bench_env(args) -> int:
     return 0
 
 
-def _songs(sources, hand: str, procedural: int):
+def _procedural(hand: str, seed: int, n: int, style: str = "mixed"):
+    """Procedural material: the left hand's exercises; the right hand's steady-rhythm patterns (ours), the authors'
+    random patterns (a string set and 5-44 frames per note), or both, half each ("mixed")."""
+    from dexguitar.music import procedural as PR
+    if hand != "right":
+        if style == "paper":
+            raise SystemExit("--style paper is the right hand's procedural material")
+        return PR.left_exercises(seed, n)
+    if style == "mixed":
+        return PR.right_patterns(seed, n - n // 2) + PR.paper_right_patterns(seed, n // 2)
+    return {"paper": PR.paper_right_patterns, "steady": PR.right_patterns}[style](seed, n)
+
+
+def _songs(sources, hand: str, procedural: int, style: str = "mixed"):
     """Songs from files, embedded names or folders; or procedural material when none are given."""
-    from dexguitar.music import load_song, procedural as PR
+    from dexguitar.music import load_song
     songs = []
     for source in sources or []:
         path = Path(source)
@@ -145,8 +159,7 @@ def _songs(sources, hand: str, procedural: int):
         else:
             songs.append(load_song(source))
     if not songs:
-        make = PR.right_patterns if hand == "right" else PR.left_exercises
-        songs = make(0, procedural)
+        songs = _procedural(hand, 0, procedural, style)
     return songs
 
 
@@ -160,7 +173,7 @@ def _train(args) -> int:
     from dexguitar.music import timeline as TL
     cfg, env_cfg = load_config(args.config, hand=args.hand, num_envs=args.envs, seed=args.seed,
                                iterations=args.iterations)
-    songs = _songs(args.song, cfg.hand, args.procedural)
+    songs = _songs(args.song, cfg.hand, args.procedural, args.style)
     motion = load_motion(args.motion or cfg.hand)
     trainer = Trainer(cfg, [TL.from_song(s) for s in songs], reference_frames(motion), env_cfg)
     print(f"training the {cfg.hand} hand on {len(songs)} song(s) with {cfg.num_envs} envs x {cfg.horizon} steps "
@@ -173,6 +186,25 @@ def _train(args) -> int:
     return 0
 
 
+def _print_results(results: dict, label: str = "") -> None:
+    for title, res in results.items():
+        s = res["summary"]
+        hands = [h for h in ("left", "right", "both") if h in s]
+        print(f"{label}{title}: " + "  ".join(
+            f"{h} F1 {s[h]['f1']:.3f} (P {s[h]['precision']:.3f} R {s[h]['recall']:.3f}, {s[h]['notes']} notes)"
+            for h in hands))
+        for chord, f1 in sorted(s["chords"].items(), key=lambda kv: kv[1]):
+            print(f"    chord {chord:>14s}  F1 {f1:.3f}")
+
+
+def sync_eval(directory, songs) -> dict:
+    """{"before": results, "after": results}: a synchronizer's two frozen policies alone, then synchronized."""
+    from dexguitar.learn.run import policy_from
+    from dexguitar.perform.evaluate import evaluate
+    return {stage: evaluate("duet", policy_from(directory, synchronized=(stage == "after"))[0], songs)
+            for stage in ("before", "after")}
+
+
 def _eval(args) -> int:
     from dexguitar.learn.run import policy_from
     from dexguitar.music import load_song
@@ -180,22 +212,64 @@ def _eval(args) -> int:
     act, meta = policy_from(args.ckpt)
     songs = [load_song(s) for s in args.song or []]
     if args.procedural:
-        from dexguitar.music import procedural as PR
-        make = PR.right_patterns if meta["hand"] == "right" else PR.left_exercises
-        songs += make(args.seed, args.procedural)
+        songs += _procedural(meta["hand"], args.seed, args.procedural, args.style)
     if not songs:
         raise SystemExit("eval: give --song and/or --procedural N")
+    keep = (lambda r: r) if args.notes else (lambda r: {k: v["summary"] for k, v in r.items()})
+    if meta.get("kind") == "synchronizer":             # before and after synchronization
+        staged = sync_eval(args.ckpt, songs)
+        if args.json:
+            print(json.dumps({stage: keep(r) for stage, r in staged.items()}, indent=2))
+            return 0
+        for stage, results in staged.items():
+            _print_results(results, f"[{stage} synchronization] ")
+        return 0
     results = evaluate(meta["hand"], act, songs)
     if args.json:
-        print(json.dumps({k: v if args.notes else v["summary"] for k, v in results.items()}, indent=2))
+        print(json.dumps(keep(results), indent=2))
         return 0
-    for title, res in results.items():
-        s = res["summary"]
-        hands = [h for h in ("left", "right", "both") if h in s]
-        print(f"{title}: " + "  ".join(f"{h} F1 {s[h]['f1']:.3f} (P {s[h]['precision']:.3f} R {s[h]['recall']:.3f},"
-                                       f" {s[h]['notes']} notes)" for h in hands))
-        for chord, f1 in sorted(s["chords"].items(), key=lambda kv: kv[1]):
-            print(f"    chord {chord:>14s}  F1 {f1:.3f}")
+    _print_results(results)
+    return 0
+
+
+def _sync(args) -> int:
+    """Synchronize two frozen policies on a song (Sec. 4), then evaluate before and after."""
+    import jax
+
+    from dexguitar.learn.run import load_config, train
+    from dexguitar.learn.sync import SyncTrainer, load_pair
+    from dexguitar.motion import load_motion
+    from dexguitar.motion.kinematics import reference_frames
+    from dexguitar.music import load_song
+    from dexguitar.music import timeline as TL
+    out = Path(args.out)
+    left, right = args.left, args.right
+    if args.resume and (out / "config.json").exists() and not (left and right):
+        recorded = json.loads((out / "config.json").read_text())
+        left, right = left or recorded["left"], right or recorded["right"]
+    if not (left and right):
+        raise SystemExit("sync: give --left and --right (exported policies or run directories)")
+    cfg, env_cfg = load_config(args.config, hand="duet", num_envs=args.envs, seed=args.seed,
+                               iterations=args.iterations)
+    songs = [load_song(s) for s in args.song]
+    pair = load_pair(left, right)
+    motion = load_motion(args.motion or "left")
+    trainer = SyncTrainer(cfg, [TL.from_song(s) for s in songs], reference_frames(motion), *pair, env_cfg)
+    print(f"synchronizing {left} + {right} on {', '.join(s.title for s in songs)} with {cfg.num_envs} envs x "
+          f"{cfg.horizon} steps ({cfg.batch} samples per iteration) on {jax.devices()[0].device_kind}; "
+          f"writing {out}", file=sys.stderr)
+    summary = train(trainer, out, iterations=cfg.iterations, resume=args.resume,
+                    meta={"songs": [s.title for s in songs], "motion": motion.name, "left": str(left),
+                          "right": str(right)},
+                    stop_after_calls=args.stop_after_calls, max_minutes=args.max_minutes)
+    print(json.dumps(summary), file=sys.stderr)
+    if args.no_eval:
+        return 0
+    staged = sync_eval(out, songs)
+    (out / "eval.json").write_text(json.dumps({stage: {k: v["summary"] for k, v in r.items()}
+                                               for stage, r in staged.items()}, indent=2))
+    for stage, results in staged.items():
+        _print_results(results, f"[{stage} synchronization] ")
     return 0
 
 
@@ -243,6 +317,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--hand", choices=["left", "right"], default=None)
     p.add_argument("--song", nargs="*", help="tab files, embedded song names or folders (none: procedural)")
     p.add_argument("--procedural", type=int, default=64, help="procedural songs when no --song is given")
+    p.add_argument("--style", choices=["steady", "paper", "mixed"], default="mixed",
+                   help="right-hand procedural material: our steady-rhythm patterns, the authors' random ones "
+                        "(a string set and 5-44 frames per note), or half each")
     p.add_argument("--config", help="experiments/*.py defining CONFIG (a TrainConfig) and optionally ENV")
     p.add_argument("--motion", help="reference motion (.npz/.json; default: the shipped clip for the hand)")
     p.add_argument("--out", required=True, help="run directory (checkpoints, metrics.jsonl, policy/)")
@@ -260,9 +337,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--song", nargs="*")
     p.add_argument("--procedural", type=int, default=0, help="also N procedural songs (a held-out seed)")
     p.add_argument("--seed", type=int, default=1000, help="seed of the procedural songs (training uses 0)")
+    p.add_argument("--style", choices=["steady", "paper", "mixed"], default="steady",
+                   help="right hand: our steady-rhythm patterns, the authors' (a random string set and 5-44 "
+                        "frames per note), or half each")
     p.add_argument("--json", action="store_true")
     p.add_argument("--notes", action="store_true", help="with --json: include the per-note rows")
     p.set_defaults(func=_eval)
+
+    p = sub.add_parser("sync", help="synchronize a frozen left and right policy on a song (Sec. 4); resumable")
+    p.add_argument("--song", nargs="+", required=True, help="tab files or embedded song names")
+    p.add_argument("--left", help="exported left-hand policy or run directory (taken from --out on --resume)")
+    p.add_argument("--right", help="exported right-hand policy or run directory (taken from --out on --resume)")
+    p.add_argument("--config", help="experiments/*.py defining CONFIG (a TrainConfig) and optionally ENV")
+    p.add_argument("--motion", help="left-hand reference motion for the discriminators (default: the shipped clip)")
+    p.add_argument("--out", required=True, help="run directory (checkpoints, metrics.jsonl, policy/, eval.json)")
+    p.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
+    p.add_argument("--envs", type=int, help="override CONFIG.num_envs")
+    p.add_argument("--iterations", type=int, help="override CONFIG.iterations (total, counting resumed ones)")
+    p.add_argument("--seed", type=int)
+    p.add_argument("--max-minutes", type=float, help="stop (with a checkpoint) after this much wall time")
+    p.add_argument("--no-eval", action="store_true", help="skip the before/after evaluation at the end")
+    p.add_argument("--stop-after-calls", type=int, help=argparse.SUPPRESS)
+    p.set_defaults(func=_sync)
 
     from dexguitar.motion.cli import add_motion_commands
     add_motion_commands(sub)

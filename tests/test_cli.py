@@ -35,3 +35,13 @@ def test_bad_input_is_one_clear_line(tmp_path, capsys):
     assert err.startswith("error: ") and "bad.txt" in err and "line 2" in err
     assert main(["song", "info", str(tmp_path / "missing.gp5")]) == 2
     assert "missing.gp5" in capsys.readouterr().err
+
+
+def test_procedural_material_by_style():
+    from dexguitar.cli import _procedural
+    mixed = _procedural("right", 0, 5, "mixed")
+    assert [s.title.split("-")[0] for s in mixed] == ["right", "right", "right", "paper", "paper"]
+    assert all(s.tempo == 225 for s in _procedural("right", 0, 3, "paper"))
+    assert len(_procedural("left", 0, 2, "mixed")) == 2                   # the left hand has one kind
+    with pytest.raises(SystemExit, match="right hand"):
+        _procedural("left", 0, 2, "paper")

@@ -206,3 +206,26 @@ def test_coverage_summary(left, right):
     assert all(cov["positions"][k] > 0 for k in ("1-5", "6-10", "11-15", "16-22"))
     assert all(v > 0 for v in cov["shapes"].values())
     assert coverage(right)["chord_fraction"] > 0.5
+
+
+def test_paper_right_patterns_follow_the_authors_distribution():
+    """Reference §3.4: one of the 21 contiguous string sets per note, uniformly; U{5..44} frames per note."""
+    from collections import Counter
+
+    from dexguitar.music import timeline as TL
+    from dexguitar.music.procedural import paper_right_patterns
+    songs = paper_right_patterns(7, 30, 40)
+    frames, sets = [], Counter()
+    for song in songs:
+        tl = TL.from_song(song)
+        assert int(tl.n_frames) == sum(int(n.duration * 64) for n in song.notes)   # 1/64 note = 1 frame at 225
+        for note in song.notes:
+            frames.append(int(note.duration * 64))
+            played = [i for i, f in enumerate(note.frets, start=1) if f != -1]
+            assert all(note.frets[i - 1] == 0 for i in played)                      # open strings only
+            assert played == list(range(played[0], played[-1] + 1))                 # contiguous
+            sets[(played[0], played[-1])] += 1
+    assert min(frames) == 5 and max(frames) == 44
+    assert len(sets) == 21
+    # 1200 notes over 21 sets: about 57 each; a uniform draw stays within +-50% with overwhelming probability
+    assert min(sets.values()) > 28 and max(sets.values()) < 86

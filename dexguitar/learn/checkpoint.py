@@ -2,7 +2,7 @@
 
 A run directory holds `ckpt/<iteration>/` (the last few full train states), `config.json` (how to rebuild the
 trainer) and `metrics.jsonl`. An export (`policy/`) holds only what acting needs: the policy parameters, the
-observation normalizer and the env sizes, a few MB."""
+observation normalizer and the env sizes, a few MB; a synchronizer's export names the two policies it shifts."""
 from __future__ import annotations
 
 import json
@@ -49,23 +49,46 @@ def restore(directory, target, step: int | None = None):
 
 
 def export_policy(directory, params, obs_norm, meta: dict) -> None:
+    """Write `params` + `obs_norm` and `policy.json`."""
     directory = Path(directory).absolute()
     directory.mkdir(parents=True, exist_ok=True)
     save(directory / "params", int(meta.get("iteration", 0)), {"policy": params, "obs_norm": obs_norm}, keep=1)
     (directory / "policy.json").write_text(json.dumps(meta, indent=2))
 
 
+def _policy_target(meta: dict) -> dict:
+    """The parameter structure of an export, rebuilt from its meta: a single-hand policy or a synchronizer."""
+    from dexguitar.envs.core import HISTORY
+    from dexguitar.learn import networks as N
+    if meta.get("kind") == "synchronizer":
+        from dexguitar.learn.sync import HAND_GOAL, init_synchronizer
+        hand = {"action_size": meta["action_size"] // 2, "goal_size": HAND_GOAL,
+                "obs_size": (meta["obs_size"] - meta["goal_size"]) // 2 + HAND_GOAL}
+        frozen = _policy_target(hand)
+        params, norm = init_synchronizer(jax.random.PRNGKey(0), frozen, frozen)
+        return {"policy": params, "obs_norm": norm}
+    frame = (meta["obs_size"] - meta["goal_size"]) // HISTORY
+    return {"policy": N.init_params(N.Policy(meta["action_size"]), jax.random.PRNGKey(0), (HISTORY, frame),
+                                    (meta["goal_size"],)),
+            "obs_norm": N.normalizer_init(frame)}
+
+
 def load_policy(directory):
-    """(params {"policy", "obs_norm"}, meta) of an exported policy; the structure is rebuilt from the meta."""
+    """(params {"policy", "obs_norm"}, meta) of an exported policy. A synchronizer's export holds the synchronizer
+    alone and names the two policies it was trained with (`sources`, paths as given to `dexguitar sync`); they are
+    loaded into params["frozen"]."""
     directory = Path(directory).absolute()
     meta_path = directory / "policy.json"
     if not meta_path.exists():
         raise FileNotFoundError(f"{directory}: not an exported policy (no policy.json)")
     meta = json.loads(meta_path.read_text())
-    from dexguitar.envs.core import HISTORY
-    from dexguitar.learn import networks as N
-    frame = (meta["obs_size"] - meta["goal_size"]) // HISTORY
-    target = {"policy": N.init_params(N.Policy(meta["action_size"]), jax.random.PRNGKey(0), (HISTORY, frame),
-                                      (meta["goal_size"],)),
-              "obs_norm": N.normalizer_init(frame)}
-    return restore(directory / "params", target), meta
+    params = restore(directory / "params", _policy_target(meta))
+    if meta.get("kind") == "synchronizer":
+        params["frozen"] = {}
+        for side, source in meta["sources"].items():
+            path = Path(source["path"])
+            if not (path / "policy.json").exists():
+                raise FileNotFoundError(f"{directory}: the {side}-hand policy it synchronizes, {path}, is missing "
+                                        f"(paths are relative to the directory `dexguitar sync` ran in)")
+            params["frozen"][side] = load_policy(path)[0]
+    return params, meta

@@ -2,7 +2,8 @@
 gradient penalty, half simulated and half reference samples, a replay buffer of simulated samples.
 
 The left hand has a composite pair of discriminators (wrist + thumb relative to the guitar; the four fingers relative
-to the wrist), so the fingers are free of the wrist's pose; the right hand has one for the whole hand."""
+to the wrist), so the fingers are free of the wrist's pose; the right hand has one for the whole hand. Synchronization
+keeps the left hand's two (the left hand is the first of the duet's hands)."""
 from __future__ import annotations
 
 import jax
@@ -15,6 +16,7 @@ DISCRIMINATORS = {
     "left": {"wrist": (tuple(range(4)), "guitar"), "fingers": (tuple(range(4, 16)), "wrist")},
     "right": {"hand": (tuple(range(16)), "guitar")},
 }
+DISCRIMINATORS["duet"] = DISCRIMINATORS["left"]    # synchronization keeps only the left hand's (Sec. 5.3)
 FRAMES = 3
 
 

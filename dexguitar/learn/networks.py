@@ -4,6 +4,7 @@ Policy: a GRU(256) encodes the 2-frame pose history, a 2-layer MLP encodes the g
 the synchronizer shifts. Then MLP 1024-1024-512 (ReLU6) and a Gaussian head with a state-dependent log-std.
 Critic: the same shape, one output per reward column (normalized by PopArt outside the network).
 Discriminator: GRU(256) over 3 frames of link poses, MLP 256-128-32; its reward is the mean of clip(D, -1, 1).
+Synchronizer (Sec. 4, reference §7.5): copies of both policies' encoders -> MLP 1024-1024 -> latent offsets.
 """
 from __future__ import annotations
 
@@ -100,6 +101,23 @@ class Discriminator(nn.Module):
         return nn.Dense(32, kernel_init=orth(1.0), name="fc3")(x)
 
 
+class Synchronizer(nn.Module):
+    """Eq. 2: trainable copies of both policies' encoders, concatenated, into an MLP whose last layer starts at zero.
+    Its output (dz_left, dz_right) shifts the frozen policies' latents (Eq. 1); at initialization both are zero, so
+    the frozen policies act exactly as they did alone."""
+
+    hidden: Sequence[int] = (1024, 1024)
+
+    @nn.compact
+    def __call__(self, frames_left, goal_left, frames_right, goal_right):
+        x = jnp.concatenate([Encoder(name="encoder_left")(frames_left, goal_left),
+                             Encoder(name="encoder_right")(frames_right, goal_right)], axis=-1)
+        for i, width in enumerate(self.hidden):
+            x = nn.relu(nn.Dense(width, name=f"fc{i + 1}")(x))
+        dz = nn.Dense(2 * LATENT, kernel_init=nn.initializers.zeros, bias_init=nn.initializers.zeros, name="dz")(x)
+        return dz[..., :LATENT], dz[..., LATENT:]
+
+
 def gaussian_log_prob(mu, log_std, action):
     """Sum over action dimensions of log N(action; mu, exp(log_std))."""
     z = (action - mu) * jnp.exp(-log_std)
@@ -143,5 +161,5 @@ def init_params(module: nn.Module, key, *shapes: Sequence[int]):
     return module.init(key, *[jnp.zeros(s) for s in shapes])
 
 
-__all__ = ["Policy", "Critic", "Discriminator", "Encoder", "gaussian_log_prob", "disc_reward", "normalizer_init",
+__all__ = ["Policy", "Critic", "Discriminator", "Encoder", "Synchronizer", "gaussian_log_prob", "disc_reward", "normalizer_init",
            "normalizer_update", "normalize", "split_obs", "init_params"]

@@ -111,23 +111,32 @@ def load_config(path: str | None, **overrides):
 
 
 def export(trainer: Trainer, state, directory) -> None:
-    """The policy alone (parameters, observation normalizer, sizes): what eval, play and sync need."""
+    """What eval and play need: the policy (or the synchronizer, naming its two frozen policies), its observation
+    normalizer and the env sizes."""
     env = trainer.env
-    C.export_policy(directory, state.params["policy"], state.obs_norm, {
-        "hand": trainer.config.hand, "action_size": env.action_size, "goal_size": env.goal_size,
-        "obs_size": env.obs_size, "iteration": int(state.iteration),
-        "samples": int(state.iteration) * trainer.config.batch,
-        "columns": list(trainer.columns)})
+    frozen = state.params.get("frozen")
+    meta = {"hand": trainer.config.hand, "kind": "synchronizer" if frozen is not None else "policy",
+            "action_size": env.action_size, "goal_size": env.goal_size, "obs_size": env.obs_size,
+            "iteration": int(state.iteration), "samples": int(state.iteration) * trainer.config.batch,
+            "columns": list(trainer.columns)}
+    if frozen is not None:
+        meta["sources"] = {side: {k: m.get(k) for k in ("path", "samples", "iteration")}
+                           for side, m in trainer.sources.items()}
+    C.export_policy(directory, state.params["policy"], state.obs_norm, meta)
 
 
-def policy_from(directory):
-    """(act, meta) from an exported policy or a run directory (its `policy/`): act(obs) -> mean action."""
+def policy_from(directory, synchronized: bool = True):
+    """(act, meta) from an exported policy or a run directory (its `policy/`): act(obs) -> mean action. For a
+    synchronizer, act plays both hands on duet observations (synchronized=False: without the latent shift)."""
     from dexguitar.envs.core import HISTORY
     from dexguitar.learn import networks as N
     directory = Path(directory)
     if not (directory / "policy.json").exists() and (directory / "policy" / "policy.json").exists():
         directory = directory / "policy"
     params, meta = C.load_policy(directory)
+    if meta.get("kind") == "synchronizer":
+        from dexguitar.learn.sync import players
+        return players(params)[int(synchronized)], meta
     policy = N.Policy(meta["action_size"])
 
     def act(obs):

@@ -100,17 +100,20 @@ class Trainer:
         key = jax.random.PRNGKey(cfg.seed) if key is None else key
         k_pol, k_crit, k_disc, k_env, key = jax.random.split(key, 5)
         frames = (HISTORY, self.frame_size)
+        policy, obs_norm, frozen = self.init_policy(k_pol)
         params = {
-            "policy": N.init_params(self.policy, k_pol, frames, (self.env.goal_size,)),
+            "policy": policy,
             "critic": N.init_params(self.critic, k_crit, frames, (self.env.goal_size + 6,)),
             "disc": {name: N.init_params(self.disc, k, (IM.FRAMES, len(links) * 7))
                      for (name, (links, _)), k in zip(self.disc_specs.items(),
                                                       jax.random.split(k_disc, max(len(self.disc_specs), 1)))},
         }
-        opt = {k: self.optimizers[k].init(params[k]) for k in params}
+        if frozen is not None:
+            params["frozen"] = frozen
+        opt = {k: self.optimizers[k].init(params[k]) for k in self.optimizers}
         env_state = jax.jit(jax.vmap(self.env.reset))(jax.random.split(k_env, cfg.num_envs))
         return TrainState(
-            params=params, opt=opt, obs_norm=N.normalizer_init(self.frame_size),
+            params=params, opt=opt, obs_norm=obs_norm,
             disc_norm={n: N.normalizer_init(len(links) * 7) for n, (links, _) in self.disc_specs.items()},
             popart=P.popart_init(len(self.columns)),
             buffers={n: IM.buffer_init(cfg.disc_buffer, (IM.FRAMES, len(links) * 7))
@@ -118,10 +121,20 @@ class Trainer:
             env=env_state, key=key, iteration=jnp.int32(0))
 
     # ------------------------------------------------------------------------------------------ pieces
-    def act(self, params, obs_norm, obs, key=None):
-        """Policy on a batch of actor observations: (action, log_prob, mean). key None = the mean action."""
+    def init_policy(self, key):
+        """(trainable policy parameters, observation normalizer, frozen parameters or None)."""
+        frames = (HISTORY, self.frame_size)
+        return (N.init_params(self.policy, key, frames, (self.env.goal_size,)), N.normalizer_init(self.frame_size),
+                None)
+
+    def distribution(self, params, frozen, obs_norm, obs):
+        """(mean, log std) of the action on a batch of actor observations."""
         frames, goal = N.split_obs(obs, HISTORY, self.env.goal_size)
-        mu, log_std = self.policy.apply(params, N.normalize(obs_norm, frames), goal)
+        return self.policy.apply(params, N.normalize(obs_norm, frames), goal)
+
+    def act(self, params, frozen, obs_norm, obs, key=None):
+        """Policy on a batch of actor observations: (action, log_prob, mean). key None = the mean action."""
+        mu, log_std = self.distribution(params, frozen, obs_norm, obs)
         if key is None:
             return mu, N.gaussian_log_prob(mu, log_std, mu), mu
         action = mu + jnp.exp(log_std) * jax.random.normal(key, mu.shape)
@@ -139,7 +152,7 @@ class Trainer:
     def rollout(self, ts: TrainState, key):
         def one(carry, k):
             env_state = carry
-            action, logp, _ = self.act(ts.params["policy"], ts.obs_norm, env_state.obs, k)
+            action, logp, _ = self.act(ts.params["policy"], ts.params.get("frozen"), ts.obs_norm, env_state.obs, k)
             nxt = jax.vmap(self.env.step)(env_state, action)
             out = dict(obs=env_state.obs, privileged=env_state.privileged, action=action, logp=logp,
                        reward=nxt.reward, done=nxt.done, terminated=nxt.terminated,
@@ -194,11 +207,11 @@ class Trainer:
         cfg = self.config
         n = batch["obs"].shape[0]
         n_mb = max(n // cfg.minibatch, 1)
-        ts_norm = ts.obs_norm
+        ts_norm, frozen = ts.obs_norm, ts.params.get("frozen")
 
         def loss_fn(params, mb):
             frames, goal = N.split_obs(mb["obs"], HISTORY, self.env.goal_size)
-            mu, log_std = self.policy.apply(params["policy"], N.normalize(ts_norm, frames), goal)
+            mu, log_std = self.distribution(params["policy"], frozen, ts_norm, mb["obs"])
             logp = N.gaussian_log_prob(mu, log_std, mb["action"])
             pl, clipped = P.policy_loss(logp, mb["logp"], mb["adv"], cfg.clip)
             v = self.critic.apply(params["critic"], N.normalize(ts_norm, frames),
@@ -273,7 +286,7 @@ class Trainer:
         metrics.update(ppo_log)
         metrics.update(disc_log)
         new = ts.replace(
-            params={"policy": params["policy"], "critic": params["critic"], "disc": disc_params},
+            params=dict(ts.params, policy=params["policy"], critic=params["critic"], disc=disc_params),
             opt={"policy": opt["policy"], "critic": opt["critic"], "disc": disc_opt},
             obs_norm=obs_norm, disc_norm=disc_norm, popart=popart, buffers=buffers, env=env_state, key=key,
             iteration=ts.iteration + 1)

@@ -457,6 +457,24 @@ def right_patterns(seed: int, n_songs: int, notes_per_song: int = 40, tempo_rang
     return songs
 
 
+def paper_right_patterns(seed: int, n_songs: int, notes_per_song: int = 40) -> list[Song]:
+    """The authors' procedural right-hand goals (reference §3.4) as songs: every note one of the 21 contiguous
+    string sets, uniformly, on open strings, lasting U{5..44} frames. At 225 BPM a 1/64 note lasts exactly one
+    60 Hz frame, so a note of d frames is written as d/64."""
+    if notes_per_song < 1:
+        raise ValueError("notes_per_song must be >= 1")
+    rng = np.random.default_rng(seed)
+    songs = []
+    for i in range(n_songs):
+        notes = []
+        for _ in range(notes_per_song):
+            lo, hi = STRING_SETS[int(rng.integers(len(STRING_SETS)))]
+            frets = tuple(OPEN if lo <= k <= hi else MUTE for k in range(1, N_STRINGS + 1))
+            notes.append(Note(Fraction(int(rng.integers(5, 45)), 64), frets))
+        songs.append(Song(225, notes, f"paper-pattern-{i}"))
+    return songs
+
+
 def _set_of(frets: Sequence[int]) -> tuple[int, int] | None:
     played = [k for k, f in enumerate(frets, start=1) if f != MUTE]
     if played and played[-1] - played[0] + 1 == len(played):

@@ -3,9 +3,8 @@ into a video (coloured strings, `colors.py`), a WAV (`audio.py`) and a report.
 
 Without a synchronizer this is the paper's "before synchronization" performance: each hand's policy sees only its
 own part of the duet observation and plays on its own clock, so the left hand may press late for the right hand's
-pick. The player is a plain `act(obs) -> action` over the duet observation, so a synchronizer (anything mapping the
-duet observation to both hands' actions, e.g. one that shifts the frozen policies' latents) plugs in as `act=` with
-nothing else changed.
+pick. The player is a plain `act(obs) -> action` over the duet observation, so a synchronizer (`learn/sync.py`, which
+shifts the frozen policies' latents) plugs in as `act=` with nothing else changed.
 
 Per-note verdicts (the "both hands" rules of `metrics.py`, Sec. 6.1):
 - right: every target picked once, pressed right at the pick and held for 2/3 of the note (both-hands F1 = 1);
@@ -252,10 +251,12 @@ def perform(song, left_dir=None, right_dir=None, out_prefix="perf", *, seconds: 
 
 
 def main(argv=None) -> int:
-    """`dexguitar play --left L --right R --song S --out perf [--seconds 10] [--frames-only]`."""
+    """`dexguitar play (--ckpt SYNC | --left L --right R) --song S --out perf [--seconds 10] [--frames-only]`."""
     p = argparse.ArgumentParser(prog="dexguitar play", description="Both hands play a song: video, audio, report.")
-    p.add_argument("--left", required=True, help="left-hand policy (exported policy or run directory)")
-    p.add_argument("--right", required=True, help="right-hand policy")
+    p.add_argument("--ckpt", help="a synchronizer (`dexguitar sync` run or its policy/): both hands, synchronized")
+    p.add_argument("--left", help="left-hand policy (exported policy or run directory), without a synchronizer")
+    p.add_argument("--right", help="right-hand policy")
+    p.add_argument("--unsynchronized", action="store_true", help="with --ckpt: its frozen policies alone")
     p.add_argument("--song", required=True, help="embedded song name or tab file")
     p.add_argument("--out", default="perf", help="output prefix: OUT.mp4 (or .png), OUT.wav, OUT-report.json")
     p.add_argument("--seconds", type=float, default=None, help="play only the first seconds")
@@ -264,9 +265,17 @@ def main(argv=None) -> int:
     p.add_argument("--size", default="960x540", help="video size WxH")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     args = p.parse_args(argv)
+    if bool(args.ckpt) == bool(args.left or args.right) or (not args.ckpt and not (args.left and args.right)):
+        p.error("give either --ckpt SYNC or both --left and --right")
+    act = None
+    if args.ckpt:
+        from dexguitar.learn.run import policy_from
+        act, meta = policy_from(args.ckpt, synchronized=not args.unsynchronized)
+        if meta.get("kind") != "synchronizer":
+            p.error(f"--ckpt {args.ckpt}: a {meta.get('hand')} hand policy, not a synchronizer (use --left/--right)")
     width, height = (int(v) for v in args.size.lower().split("x"))
-    report = perform(args.song, args.left, args.right, args.out, seconds=args.seconds, video=not args.frames_only,
-                     video_fps=args.fps, width=width, height=height, quiet=args.json)
+    report = perform(args.song, args.left, args.right, args.out, seconds=args.seconds, act=act,
+                     video=not args.frames_only, video_fps=args.fps, width=width, height=height, quiet=args.json)
     if args.json:
         print(json.dumps(report, indent=1))
     return 0

@@ -1,0 +1,162 @@
+"""The synchronizer (Sec. 4, Eq. 1-2): unchanged actions at initialization, frozen policies, one training iteration in
+the duet env, exact resume, the export and the `dexguitar sync` / `eval` commands on a tiny song."""
+import json
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from dexguitar.envs.core import HISTORY
+from dexguitar.learn import checkpoint as C
+from dexguitar.learn import networks as N
+from dexguitar.learn import sync as SY
+
+TINY_SONG = """title: two notes and a chord
+tempo: 120
+grid: 1/8
+e|--0---------|
+B|----1-------|
+G|------0-----|
+D|------2-----|
+A|------3-----|
+E|------------|
+"""
+
+
+def random_policy(key, meta_hand, noise=0.05):
+    """An exported-looking single-hand policy with random weights and a non-trivial normalizer. With noise > 0 the
+    weights are larger than at init, so that the latent matters for the action (but the hands flail)."""
+    k1, k2, k3, k4 = jax.random.split(key, 4)
+    policy = N.Policy(27)
+    params = N.init_params(policy, k1, (HISTORY, 208), (35,))
+    # larger random weights than the init, so that the latent matters for the action
+    params = jax.tree.map(lambda x: x + noise * jax.random.normal(k4, x.shape), params)
+    norm = {"mean": jax.random.normal(k2, (208,)), "var": jnp.exp(jax.random.normal(k3, (208,))),
+            "count": jnp.float32(100.0)}
+    meta = {"hand": meta_hand, "action_size": 27, "goal_size": 35, "obs_size": 2 * 208 + 35, "samples": 0}
+    return {"policy": params, "obs_norm": norm}, meta
+
+
+@pytest.fixture(scope="module")
+def pair():
+    return random_policy(jax.random.PRNGKey(1), "left"), random_policy(jax.random.PRNGKey(2), "right")
+
+
+def test_synchronizer_at_initialization_leaves_both_policies_actions_unchanged(pair):
+    from dexguitar.perform.play import split_obs
+    (left, _), (right, _) = pair
+    sync, norm = SY.init_synchronizer(jax.random.PRNGKey(3), left, right)
+    params = {"policy": sync, "obs_norm": norm, "frozen": {"left": left, "right": right}}
+    obs = jax.random.normal(jax.random.PRNGKey(4), (7, 2 * 416 + 70))
+    # each policy alone on its own part of the duet observation (the unsynchronized player's path)
+    obs_l, obs_r = split_obs(obs)
+    alone = []
+    for p, o in ((left, obs_l), (right, obs_r)):
+        frames, goal = N.split_obs(o, HISTORY, 35)
+        alone.append(N.Policy(27).apply(p["policy"], N.normalize(p["obs_norm"], frames), goal))
+    mu, log_std = SY.distribution(params, obs)
+    np.testing.assert_allclose(mu, jnp.concatenate([alone[0][0], alone[1][0]], -1), atol=1e-6)
+    np.testing.assert_allclose(log_std, jnp.concatenate([alone[0][1], alone[1][1]], -1), atol=1e-6)
+    # the encoders are copies of the policies' and the offsets are zero ...
+    assert jax.tree.all(jax.tree.map(np.array_equal, sync["params"]["encoder_left"],
+                                     left["policy"]["params"]["encoder"]))
+    dz = N.Synchronizer().apply(sync, jnp.zeros((HISTORY, 208)), jnp.zeros(35), jnp.ones((HISTORY, 208)),
+                                jnp.ones(35))
+    assert float(jnp.abs(jnp.concatenate(dz)).max()) == 0.0
+    # ... and a non-zero last layer does move both hands (the check above could fail)
+    moved = jax.tree.map(lambda x: x, sync)
+    moved["params"]["dz"]["bias"] = jnp.ones(512)
+    mu2, _ = SY.distribution({**params, "policy": moved}, obs)
+    assert float(jnp.abs(mu2[:, :27] - mu[:, :27]).max()) > 1e-3
+    assert float(jnp.abs(mu2[:, 27:] - mu[:, 27:]).max()) > 1e-3
+
+
+def test_pair_is_checked(pair):
+    (left, lmeta), (right, rmeta) = pair
+    with pytest.raises(ValueError, match="RIGHT: a policy for the left hand"):
+        SY.check_pair(lmeta, lmeta)
+    with pytest.raises(ValueError, match="action size 54"):
+        SY.check_pair(dict(lmeta, action_size=54), rmeta)
+
+
+@pytest.fixture(scope="module")
+def sync_trainer(pair, tmp_path_factory):
+    from dexguitar.learn.trainer import TrainConfig
+    from dexguitar.motion import load_motion
+    from dexguitar.motion.kinematics import reference_frames
+    from dexguitar.music import load_song
+    from dexguitar.music import timeline as TL
+    base = tmp_path_factory.mktemp("sync")
+    path = base / "tiny.txt"
+    path.write_text(TINY_SONG)
+    for (params, meta), name in zip(pair, ("left", "right")):
+        C.export_policy(base / name, params["policy"], params["obs_norm"], meta)
+    cfg = TrainConfig(hand="duet", num_envs=4, horizon=4, minibatch=8, epochs=2, disc_steps=2, disc_buffer=64,
+                      disc_batch=16, iterations_per_call=1)
+    return SY.SyncTrainer(cfg, [TL.from_song(load_song(path))], reference_frames(load_motion("left")),
+                          *SY.load_pair(base / "left", base / "right"))
+
+
+def test_sync_iteration_trains_only_the_synchronizer_and_resumes_exactly(sync_trainer, tmp_path):
+    t = sync_trainer
+    assert t.columns == tuple(f"string{i}" for i in range(1, 7)) + ("pick", "disc_wrist", "disc_fingers")
+    np.testing.assert_allclose(t.weights, [0.15] * 6 + [1.0, 0.05, 0.05])
+    assert abs(float(jnp.sum(t.weights)) - 2.0) < 1e-6                  # reference §5.3: they sum to 2
+    chunk = t.make_train_chunk(1)
+    start = t.init()
+    p0 = jax.device_get(start.params)
+    first, metrics = chunk(start)
+    assert all(np.isfinite(float(v)) for k, v in metrics.items() if not k.startswith("f1/"))
+    p1 = jax.device_get(first.params)
+    diff = jax.tree.map(lambda a, b: float(np.abs(np.asarray(a) - b).max()), p1, p0)
+    assert max(jax.tree.leaves(diff["policy"]["params"]["dz"])) > 0           # the synchronizer learns
+    assert max(jax.tree.leaves(diff["critic"])) > 0
+    assert max(jax.tree.leaves(diff["frozen"])) == 0.0                         # both policies stay as they were
+    assert p1["critic"]["params"]["value"]["kernel"].shape[-1] == 9
+    C.save(tmp_path / "ckpt", int(first.iteration), first)
+    uninterrupted, _ = chunk(first)
+    resumed, _ = chunk(C.restore(tmp_path / "ckpt", t.init()))
+    same = jax.tree.map(lambda a, b: np.array_equal(np.asarray(a), np.asarray(b)), resumed, uninterrupted)
+    assert all(jax.tree.leaves(same))
+
+
+def test_export_plays_before_and_after(sync_trainer, tmp_path):
+    from dexguitar.learn.run import export, policy_from
+    state = sync_trainer.init()
+    export(sync_trainer, state, tmp_path / "policy")
+    meta = json.loads((tmp_path / "policy" / "policy.json").read_text())
+    assert meta["kind"] == "synchronizer" and meta["action_size"] == 54
+    assert meta["sources"]["left"]["path"].endswith("left")           # the export names the policies it shifts
+    before, _ = policy_from(tmp_path / "policy", synchronized=False)
+    after, _ = policy_from(tmp_path / "policy")
+    obs = jax.random.normal(jax.random.PRNGKey(0), (3, 2 * 416 + 70))
+    np.testing.assert_allclose(before(obs), after(obs), atol=1e-6)             # untrained: the same actions
+    mu, _ = sync_trainer.distribution(state.params["policy"], state.params["frozen"], state.obs_norm, obs)
+    np.testing.assert_allclose(after(obs), mu, atol=1e-6)
+
+
+def test_sync_command_end_to_end(tmp_path):
+    from dexguitar.cli import main
+    dirs = []
+    calm = random_policy(jax.random.PRNGKey(1), "left", 0.0), random_policy(jax.random.PRNGKey(2), "right", 0.0)
+    for (params, meta), name in zip(calm, ("left", "right")):
+        C.export_policy(tmp_path / name, params["policy"], params["obs_norm"], meta)
+        dirs.append(str(tmp_path / name))
+    song = tmp_path / "tiny.txt"
+    song.write_text(TINY_SONG)
+    out = tmp_path / "run"
+    args = ["sync", "--song", str(song), "--left", dirs[0], "--right", dirs[1], "--config",
+            "experiments/cpu_smoke.py", "--out", str(out)]
+    assert main(args + ["--iterations", "1", "--no-eval"]) == 0
+    with pytest.raises(SystemExit, match="--resume"):
+        main(args + ["--iterations", "1", "--no-eval"])
+    # resume with the policies recorded in the run (nothing left to train), then the before/after evaluation
+    assert main(["sync", "--song", str(song), "--config", "experiments/cpu_smoke.py", "--out", str(out),
+                 "--resume", "--iterations", "1"]) == 0
+    assert [json.loads(x)["iteration"] for x in (out / "metrics.jsonl").read_text().splitlines()] == [1]
+    result = json.loads((out / "eval.json").read_text())
+    for stage in ("before", "after"):
+        summary = result[stage]["two notes and a chord"]
+        assert set(summary) >= {"left", "right", "both"}
+        assert summary["right"]["notes"] >= 1
