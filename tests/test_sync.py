@@ -115,8 +115,9 @@ def test_sync_iteration_trains_only_the_synchronizer_and_resumes_exactly(sync_tr
     assert max(jax.tree.leaves(diff["frozen"])) == 0.0                         # both policies stay as they were
     assert p1["critic"]["params"]["value"]["kernel"].shape[-1] == 9
     C.save(tmp_path / "ckpt", int(first.iteration), first)
+    template = jax.tree.map(np.zeros_like, jax.device_get(first))     # a fresh process's structure (no compile)
     uninterrupted, _ = chunk(first)
-    resumed, _ = chunk(C.restore(tmp_path / "ckpt", t.init()))
+    resumed, _ = chunk(C.restore(tmp_path / "ckpt", template))
     same = jax.tree.map(lambda a, b: np.array_equal(np.asarray(a), np.asarray(b)), resumed, uninterrupted)
     assert all(jax.tree.leaves(same))
 
@@ -151,12 +152,10 @@ def test_sync_command_end_to_end(tmp_path):
     assert main(args + ["--iterations", "1", "--no-eval"]) == 0
     with pytest.raises(SystemExit, match="--resume"):
         main(args + ["--iterations", "1", "--no-eval"])
-    # resume with the policies recorded in the run (nothing left to train), then the before/after evaluation
+    # resume with the policies recorded in the run (nothing left to train); the before/after evaluation that `sync`
+    # ends with runs in tests/test_notebooks.py (synchronize.ipynb) and test_export_plays_before_and_after
     assert main(["sync", "--song", str(song), "--config", "experiments/cpu_smoke.py", "--out", str(out),
-                 "--resume", "--iterations", "1"]) == 0
+                 "--resume", "--iterations", "1", "--no-eval"]) == 0
     assert [json.loads(x)["iteration"] for x in (out / "metrics.jsonl").read_text().splitlines()] == [1]
-    result = json.loads((out / "eval.json").read_text())
-    for stage in ("before", "after"):
-        summary = result[stage]["two notes and a chord"]
-        assert set(summary) >= {"left", "right", "both"}
-        assert summary["right"]["notes"] >= 1
+    meta = json.loads((out / "policy" / "policy.json").read_text())
+    assert meta["kind"] == "synchronizer" and meta["sources"]["right"]["path"] == dirs[1]
