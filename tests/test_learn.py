@@ -149,7 +149,7 @@ def test_training_iterations_and_exact_resume(trainer, tmp_path):
     for net in ("policy", "critic", "disc"):
         assert max(jax.tree.leaves(changed[net])) > 0, net
     C.save(tmp_path / "ckpt", int(first.iteration), first)
-    template = jax.tree.map(np.zeros_like, jax.device_get(first))     # a fresh process's structure (no compile)
+    template = jax.tree.map(jnp.zeros_like, first)          # a fresh process's structure, without building it
     uninterrupted, _ = chunk(first)
     restored = C.restore(tmp_path / "ckpt", template)
     assert int(restored.iteration) == 1
