@@ -161,5 +161,6 @@ def init_params(module: nn.Module, key, *shapes: Sequence[int]):
     return module.init(key, *[jnp.zeros(s) for s in shapes])
 
 
-__all__ = ["Policy", "Critic", "Discriminator", "Encoder", "Synchronizer", "gaussian_log_prob", "disc_reward", "normalizer_init",
+__all__ = ["Policy", "Critic", "Discriminator", "Encoder", "Synchronizer", "gaussian_log_prob", "disc_reward",
+           "normalizer_init",
            "normalizer_update", "normalize", "split_obs", "init_params"]

@@ -8,7 +8,7 @@ E_L, E_R are the frozen policies' encoders; E'_L, E'_R trainable copies of them;
 Only the synchronizer and a new critic with one column per reward (the left hand's 6 strings, the right hand's
 picking, the left hand's 2 discriminators) learn, by the same multi-objective PPO, in the duet env with the
 cooperative reward. The discriminators are reward models, trained from scratch against the left reference motion as
-in single-hand training. Unlike the authors' code (which leaves the log-std heads trainable, reference §12 item 9) every
+in single-hand training. Unlike the authors' code (which leaves the log-std heads trainable, reference §12, 9) every
 parameter of both policies stays frozen, as the paper says.
 
 The synchronizer's encoders read the duet frames through their own running normalizer, started from the two
