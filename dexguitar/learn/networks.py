@@ -162,5 +162,4 @@ def init_params(module: nn.Module, key, *shapes: Sequence[int]):
 
 
 __all__ = ["Policy", "Critic", "Discriminator", "Encoder", "Synchronizer", "gaussian_log_prob", "disc_reward",
-           "normalizer_init",
-           "normalizer_update", "normalize", "split_obs", "init_params"]
+           "normalizer_init", "normalizer_update", "normalize", "split_obs", "init_params"]
