@@ -284,6 +284,18 @@ def _plot(args) -> int:
     return 0
 
 
+def _add_run_args(p: argparse.ArgumentParser, out_help: str) -> None:
+    """The options every resumable training run has (`train`, `sync`)."""
+    p.add_argument("--config", help="experiments/*.py defining CONFIG (a TrainConfig) and optionally ENV")
+    p.add_argument("--out", required=True, help=out_help)
+    p.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
+    p.add_argument("--envs", type=int, help="override CONFIG.num_envs")
+    p.add_argument("--iterations", type=int, help="override CONFIG.iterations (total, counting resumed ones)")
+    p.add_argument("--seed", type=int)
+    p.add_argument("--max-minutes", type=float, help="stop (with a checkpoint) after this much wall time")
+    p.add_argument("--stop-after-calls", type=int, help=argparse.SUPPRESS)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="dexguitar", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -320,16 +332,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--style", choices=["steady", "paper", "mixed"], default="mixed",
                    help="right-hand procedural material: our steady-rhythm patterns, the authors' random ones "
                         "(a string set and 5-44 frames per note), or half each")
-    p.add_argument("--config", help="experiments/*.py defining CONFIG (a TrainConfig) and optionally ENV")
     p.add_argument("--motion", help="reference motion (.npz/.json; default: the shipped clip for the hand)")
-    p.add_argument("--out", required=True, help="run directory (checkpoints, metrics.jsonl, policy/)")
-    p.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
-    p.add_argument("--envs", type=int, help="override CONFIG.num_envs")
-    p.add_argument("--iterations", type=int, help="override CONFIG.iterations (total, counting resumed ones)")
-    p.add_argument("--seed", type=int)
+    _add_run_args(p, "run directory (checkpoints, metrics.jsonl, policy/)")
     p.add_argument("--init-from", help="start the policy (and its normalizer) from an exported policy or run")
-    p.add_argument("--max-minutes", type=float, help="stop (with a checkpoint) after this much wall time")
-    p.add_argument("--stop-after-calls", type=int, help=argparse.SUPPRESS)
     p.set_defaults(func=_train)
 
     p = sub.add_parser("eval", help="F1 per hand by the paper's rules, per song and per chord")
@@ -348,16 +353,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--song", nargs="+", required=True, help="tab files or embedded song names")
     p.add_argument("--left", help="exported left-hand policy or run directory (taken from --out on --resume)")
     p.add_argument("--right", help="exported right-hand policy or run directory (taken from --out on --resume)")
-    p.add_argument("--config", help="experiments/*.py defining CONFIG (a TrainConfig) and optionally ENV")
     p.add_argument("--motion", help="left-hand reference motion for the discriminators (default: the shipped clip)")
-    p.add_argument("--out", required=True, help="run directory (checkpoints, metrics.jsonl, policy/, eval.json)")
-    p.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
-    p.add_argument("--envs", type=int, help="override CONFIG.num_envs")
-    p.add_argument("--iterations", type=int, help="override CONFIG.iterations (total, counting resumed ones)")
-    p.add_argument("--seed", type=int)
-    p.add_argument("--max-minutes", type=float, help="stop (with a checkpoint) after this much wall time")
+    _add_run_args(p, "run directory (checkpoints, metrics.jsonl, policy/, eval.json)")
     p.add_argument("--no-eval", action="store_true", help="skip the before/after evaluation at the end")
-    p.add_argument("--stop-after-calls", type=int, help=argparse.SUPPRESS)
     p.set_defaults(func=_sync)
 
     from dexguitar.motion.cli import add_motion_commands

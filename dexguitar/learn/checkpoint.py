@@ -73,6 +73,14 @@ def _policy_target(meta: dict) -> dict:
             "obs_norm": N.normalizer_init(frame)}
 
 
+def export_dir(directory) -> Path:
+    """An exported policy's directory: `directory` itself, or the `policy/` export of a run directory."""
+    directory = Path(directory)
+    if not (directory / "policy.json").exists() and (directory / "policy" / "policy.json").exists():
+        return directory / "policy"
+    return directory
+
+
 def load_policy(directory):
     """(params {"policy", "obs_norm"}, meta) of an exported policy. A synchronizer's export holds the synchronizer
     alone and names the two policies it was trained with (`sources`, paths as given to `dexguitar sync`); they are

@@ -38,8 +38,7 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
     ckpt_dir = out / "ckpt"
     state = trainer.init()
     if init_from and C.latest_step(ckpt_dir) is None:
-        params, meta_init = C.load_policy(Path(init_from) / "policy" if (Path(init_from) / "policy").exists()
-                                          else init_from)
+        params, meta_init = C.load_policy(C.export_dir(init_from))
         if meta_init["hand"] != cfg.hand:
             raise SystemExit(f"--init-from {init_from}: a {meta_init['hand']} hand policy, not {cfg.hand}")
         state = state.replace(params=dict(state.params, policy=params["policy"]), obs_norm=params["obs_norm"])
@@ -130,10 +129,7 @@ def policy_from(directory, synchronized: bool = True):
     synchronizer, act plays both hands on duet observations (synchronized=False: without the latent shift)."""
     from dexguitar.envs.core import HISTORY
     from dexguitar.learn import networks as N
-    directory = Path(directory)
-    if not (directory / "policy.json").exists() and (directory / "policy" / "policy.json").exists():
-        directory = directory / "policy"
-    params, meta = C.load_policy(directory)
+    params, meta = C.load_policy(C.export_dir(directory))
     if meta.get("kind") == "synchronizer":
         from dexguitar.learn.sync import players
         return players(params)[int(synchronized)], meta

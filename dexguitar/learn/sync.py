@@ -114,14 +114,10 @@ class SyncTrainer(Trainer):
 
 def load_pair(left_dir, right_dir):
     """((params, meta), (params, meta)) of two exported single-hand policies (or run directories), checked."""
-    from pathlib import Path
-
     from dexguitar.learn import checkpoint as C
     out = []
     for directory in (left_dir, right_dir):
-        directory = Path(directory)
-        if not (directory / "policy.json").exists() and (directory / "policy" / "policy.json").exists():
-            directory = directory / "policy"
+        directory = C.export_dir(directory)
         params, meta = C.load_policy(directory)
         out.append((params, dict(meta, path=str(directory))))
     check_pair(out[0][1], out[1][1], where=(str(left_dir), str(right_dir)))
