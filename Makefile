@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: setup demo test check models clean train-left train-right sync eval plot
+.PHONY: setup demo test check models clean train-left train-left-general train-right sync songs eval plot
 SONG ?= ode_to_joy
 CONFIG_LEFT ?= experiments/left_gpu.py
 CONFIG_RIGHT ?= experiments/right_gpu.py
@@ -12,25 +12,30 @@ CONFIG_SYNC ?= experiments/sync_gpu.py
 LEFT ?= models/policies/left_$(SONG)
 RIGHT ?= models/policies/right_patterns
 OUT ?= runs
+JOBS ?= 2                      # test processes (compilation is single-threaded: one per core)
 
 $(STAMP): pyproject.toml
 	$(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e ".[dev,video,plot]"
-	@# offscreen OpenGL for rendering (OSMesa or EGL); installed from Debian's packages when missing and possible
-	@$(PY) -c "import ctypes.util as u, sys; sys.exit(0 if u.find_library('OSMesa') or u.find_library('EGL') else 1)" \
-	  || (command -v apt-get >/dev/null && [ "$$(id -u)" = 0 ] && (apt-get update -qq && apt-get install -y -qq libosmesa6) >/dev/null) \
-	  || echo "warning: no offscreen OpenGL (install libosmesa6 or libegl1): videos cannot be rendered"
+	@# Offscreen OpenGL for the videos, tried for real (a context that draws, not a library on disk): OSMesa, the
+	@# fastest on a CPU, is installed from Debian's packages when it does not draw and we are root. Then one line
+	@# says what renders, or what to install (`make demo` writes the audio and the report either way).
+	@$(BIN)/python -m dexguitar.motion.glcheck osmesa >/dev/null \
+	  || { [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null && echo "installing libosmesa6 (offscreen OpenGL)" \
+	       && apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libosmesa6 >/dev/null 2>&1; } \
+	  || true
+	@$(BIN)/python -m dexguitar.motion.glcheck || true
 	touch $(STAMP)
 
 setup: $(STAMP)                ## make the virtual environment and install the package
 
 demo: $(STAMP)                 ## the main job: the shipped synchronized policies play a song -> out/demo.mp4, .wav, report
 	$(BIN)/dexguitar song list
-	$(BIN)/dexguitar play --ckpt models/policies/sync_strum_g_c_d --song strum_g_c_d --out out/demo
+	$(BIN)/dexguitar play --ckpt models/policies/sync_strum_g_c_d --song strum_g_c_d --out out/demo --caption
 
 test: $(STAMP)                 ## the CPU test suite
-	JAX_PLATFORMS=cpu $(BIN)/python -m pytest
+	JAX_PLATFORMS=cpu $(BIN)/python -m pytest -n $(JOBS) --dist loadfile
 
 check: $(STAMP)                ## every scene steps in MJX (4 envs, jit + vmap)
 	$(BIN)/dexguitar check
@@ -39,12 +44,19 @@ train-left: $(STAMP)           ## make train-left SONG="ode_to_joy twinkle" [MOT
 	$(BIN)/dexguitar train --hand left --song $(SONG) --config $(CONFIG_LEFT) \
 	  --out $(OUT)/left-$(firstword $(notdir $(SONG))) $(if $(MOTION),--motion $(MOTION)) $(if $(RESUME),--resume)
 
+train-left-general: $(STAMP)   ## the general-purpose left hand on balanced procedural material [RESUME=1] [DEVICES=n]
+	$(BIN)/dexguitar train --hand left --style general --config experiments/left_general.py \
+	  --out $(OUT)/left-general $(if $(RESUME),--resume) $(if $(DEVICES),--devices $(DEVICES))
+
 train-right: $(STAMP)          ## procedural picking and strumming patterns
 	$(BIN)/dexguitar train --hand right --config $(CONFIG_RIGHT) --out $(OUT)/right $(if $(RESUME),--resume)
 
 sync: $(STAMP)                 ## make sync SONG=strum_g_c_d [LEFT=dir] [RIGHT=dir] [RESUME=1]: both hands in time
 	$(BIN)/dexguitar sync --song $(SONG) --left $(LEFT) --right $(RIGHT) --config $(CONFIG_SYNC) \
 	  --out $(OUT)/sync-$(firstword $(notdir $(SONG))) $(if $(RESUME),--resume)
+
+songs: $(STAMP)                ## make songs SONGS="../shared/data/official/notes/*.json": tabs -> synchronized pair -> F1 table
+	$(BIN)/dexguitar songs $(SONGS) --out $(OUT)/songs $(if $(PER_SONG),--per-song)
 
 eval: $(STAMP)                 ## make eval CKPT=models/policies/left_ode_to_joy SONG=ode_to_joy
 	$(BIN)/dexguitar eval --ckpt $(CKPT) --song $(SONG)

@@ -38,10 +38,12 @@ def test_bad_input_is_one_clear_line(tmp_path, capsys):
 
 
 def test_procedural_material_by_style():
-    from dexguitar.cli import _procedural
-    mixed = _procedural("right", 0, 5, "mixed")
+    from dexguitar.errors import UserError
+    from dexguitar.music.procedural import material
+    mixed = material("right", "mixed", 0, 5)
     assert [s.title.split("-")[0] for s in mixed] == ["right", "right", "right", "paper", "paper"]
-    assert all(s.tempo == 225 for s in _procedural("right", 0, 3, "paper"))
-    assert len(_procedural("left", 0, 2, "mixed")) == 2                   # the left hand has one kind
-    with pytest.raises(SystemExit, match="right hand"):
-        _procedural("left", 0, 2, "paper")
+    assert all(s.tempo == 225 for s in material("right", "paper", 0, 3))
+    assert len(material("left", "exercises", 0, 2)) == 2
+    assert len(material("left", None, 0, 3)) == 3                         # the left hand's default: general
+    with pytest.raises(UserError, match="not a left-hand style"):
+        material("left", "paper", 0, 2)

@@ -7,16 +7,8 @@ interpolation x = x_nut + (0.2165 - y) / L * (x_bridge - x_nut).
 import jax
 import jax.numpy as jnp
 import numpy as np
-import pytest
 
-from dexguitar.world.detect import (
-    NOT_PICKED_T,
-    pick_crossings,
-    point_segment_distance,
-    pressed_frets,
-    segment_distance,
-    string_distances,
-)
+from dexguitar.world.detect import NOT_PICKED_T, pick_crossings, pressed_frets, string_distances
 from dexguitar.world.guitar import GUITAR, Guitar
 
 MIRRORED = Guitar(mirror=True)
@@ -24,84 +16,6 @@ MIRRORED = Guitar(mirror=True)
 
 def f32(*x):
     return jnp.asarray(x, jnp.float32)
-
-
-def seg_dist(p0, p1, q0, q1):
-    return [np.asarray(v) for v in jax.jit(segment_distance)(f32(*p0), f32(*p1), f32(*q0), f32(*q1))]
-
-
-# ------------------------------------------------------------------------------------------ segment distance
-
-
-def test_skew_segments():
-    # p along x (0,0,0)->(2,0,0); q along y at x = 1, z = 3 from y = -1 to 3: closest p(0.5) = (1,0,0),
-    # q(0.25) = (1,0,3) -> dist2 = 3^2 = 9.
-    d2, s, t = seg_dist((0, 0, 0), (2, 0, 0), (1, -1, 3), (1, 3, 3))
-    np.testing.assert_allclose([d2, s, t], [9.0, 0.5, 0.25], atol=1e-6)
-    # Same p, q at x = 3, z = 1, y -1..1: the lines' closest point x = 3 is past p's end -> s = 1 at (2,0,0),
-    # q(0.5) = (3,0,1) -> dist2 = 1^2 + 1^2 = 2.
-    d2, s, t = seg_dist((0, 0, 0), (2, 0, 0), (3, -1, 1), (3, 1, 1))
-    np.testing.assert_allclose([d2, s, t], [2.0, 1.0, 0.5], atol=1e-6)
-    # Non-orthogonal skew: p (0,0,0)->(1,1,0) in z = 0, q (1,0,1)->(0,1,1) in z = 1; xy projections cross at
-    # (0.5, 0.5) -> s = t = 0.5, dist2 = 1.
-    d2, s, t = seg_dist((0, 0, 0), (1, 1, 0), (1, 0, 1), (0, 1, 1))
-    np.testing.assert_allclose([d2, s, t], [1.0, 0.5, 0.5], atol=1e-6)
-
-
-def test_parallel_segments():
-    # Overlapping in x over [0.5, 1], 0.2 apart in y -> dist2 = 0.04; any closest pair has p.x = s = q.x = 0.5 + t.
-    d2, s, t = seg_dist((0, 0, 0), (1, 0, 0), (0.5, 0.2, 0), (1.5, 0.2, 0))
-    np.testing.assert_allclose(d2, 0.04, rtol=1e-5)
-    assert 0.5 <= s <= 1.0 and 0.0 <= t <= 0.5
-    np.testing.assert_allclose(s, 0.5 + t, atol=1e-6)
-    # Disjoint, q from (2,1,0) to (3,1,0): closest p(1) = (1,0,0), q(0) = (2,1,0) -> dist2 = 1 + 1 = 2.
-    d2, s, t = seg_dist((0, 0, 0), (1, 0, 0), (2, 1, 0), (3, 1, 0))
-    np.testing.assert_allclose([d2, s, t], [2.0, 1.0, 0.0], atol=1e-6)
-    # Anti-parallel, q reversed: the same end point (2,1,0) is now q(1).
-    d2, s, t = seg_dist((0, 0, 0), (1, 0, 0), (3, 1, 0), (2, 1, 0))
-    np.testing.assert_allclose([d2, s, t], [2.0, 1.0, 1.0], atol=1e-6)
-
-
-def test_zero_length_segments():
-    # p a point (0,0,1) above q (-1,0,0)->(1,0,0): foot at q(0.5) = (0,0,0), dist2 = 1.
-    d2, s, t = seg_dist((0, 0, 1), (0, 0, 1), (-1, 0, 0), (1, 0, 0))
-    np.testing.assert_allclose([d2, s, t], [1.0, 0.0, 0.5], atol=1e-6)
-    # q a point (0.25,0,1) against p (0,0,0)->(1,0,0): foot p(0.25), dist2 = 1.
-    d2, s, t = seg_dist((0, 0, 0), (1, 0, 0), (0.25, 0, 1), (0.25, 0, 1))
-    np.testing.assert_allclose([d2, s, t], [1.0, 0.25, 0.0], atol=1e-6)
-    # Both points: (1,2,3) to (1,0,0) -> dist2 = 0 + 4 + 9 = 13.
-    d2, s, t = seg_dist((1, 2, 3), (1, 2, 3), (1, 0, 0), (1, 0, 0))
-    np.testing.assert_allclose([d2, s, t], [13.0, 0.0, 0.0], atol=1e-5)
-
-
-def test_perpendicular_crossing():
-    # x axis and y axis segments through the origin: they touch at s = t = 0.5.
-    d2, s, t = seg_dist((-1, 0, 0), (1, 0, 0), (0, -1, 0), (0, 1, 0))
-    np.testing.assert_allclose([d2, s, t], [0.0, 0.5, 0.5], atol=1e-7)
-
-
-@pytest.mark.parametrize("case", [
-    ((0, 0, 0), (1, 0, 0), (0.5, 0.2, 0), (1.5, 0.2, 0)),   # parallel
-    ((0, 0, 1), (0, 0, 1), (-1, 0, 0), (1, 0, 0)),          # p degenerate
-    ((1, 2, 3), (1, 2, 3), (1, 0, 0), (1, 0, 0)),           # both degenerate
-    ((-1, 0, 0), (1, 0, 0), (0, -1, 0), (0, 1, 0)),         # crossing at distance 0
-    ((0, 0, 0), (0, 0, 0), (0, 0, 0), (0, 0, 0)),           # everything at one point
-])
-def test_segment_distance_gradients_finite(case):
-    args = [f32(*p) for p in case]
-    grads = jax.jit(jax.grad(lambda *a: segment_distance(*a)[0], argnums=(0, 1, 2, 3)))(*args)
-    for g in grads:
-        assert np.all(np.isfinite(np.asarray(g)))
-
-
-def test_point_segment_distance():
-    fn = jax.jit(point_segment_distance)
-    d2, t = fn(f32(0.5, 1, 0), f32(0, 0, 0), f32(1, 0, 0))   # foot (0.5,0,0): dist2 1
-    np.testing.assert_allclose([d2, t], [1.0, 0.5], atol=1e-6)
-    d2, t = fn(f32(2, 0, 0), f32(0, 0, 0), f32(1, 0, 0))     # past the end: (1,0,0), dist2 1
-    np.testing.assert_allclose([d2, t], [1.0, 1.0], atol=1e-6)
-    d2, t = fn(f32(0, 3, 4), f32(0, 0, 0), f32(0, 0, 0))     # degenerate segment: 9 + 16 = 25
-    np.testing.assert_allclose([d2, t], [25.0, 0.0], atol=1e-5)
 
 
 # ---------------------------------------------------------------------------------------------------- presses

@@ -1,4 +1,5 @@
 """The env protocol on CPU with 4 envs: jit + vmap, determinism, auto-reset, windows, observation layout."""
+import chex
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -56,6 +57,20 @@ def test_same_key_same_trajectory_and_auto_reset(left):
     assert all(np.isfinite(np.asarray(s.obs)).all() for s in a)
 
 
+def test_non_finite_physics_terminates_and_resets_only_that_env(left):
+    env, reset, step = left
+    state = reset(jax.random.split(jax.random.PRNGKey(0), N_ENVS))
+    state = step(state, jnp.zeros((N_ENVS, env.action_size)))
+    action = jnp.zeros((N_ENVS, env.action_size)).at[1, 3].set(jnp.nan)   # one NaN number for env 1
+    state = step(state, action)
+    # during the grace frames nothing may terminate, except physics that is no longer finite
+    assert np.asarray(state.info["nonfinite"]).tolist() == [False, True, False, False]
+    assert np.asarray(state.terminated).tolist() == [False, True, False, False]
+    np.testing.assert_array_equal(np.asarray(state.reward)[1], [-25.0] * 6)     # the terminal reward, not NaN
+    assert np.asarray(state.lifetime).tolist() == [2, 0, 2, 2]                  # env 1 starts over
+    assert np.isfinite(np.asarray(state.obs)).all() and np.isfinite(np.asarray(state.body.data.qpos)).all()
+
+
 def test_training_window_is_a_rest_then_song_notes(left):
     env, _, _ = left
     for seed in range(20):
@@ -76,7 +91,7 @@ def test_evaluation_plays_the_song_from_its_start_and_stops():
     env = envs.make("left", [song], envs.EnvConfig().evaluation())
     reset, step = jax.jit(env.reset), jax.jit(env.step)
     state = reset(jax.random.PRNGKey(0), 0)
-    w = state.window
+    w = state.cursor.window
     # the 5-frame grace rest, then the song: 1/8 at 100 BPM = 18 frames
     assert int(w.n) == 9 and np.asarray(w.dur)[:9].tolist() == [5] + [18] * 8
     np.testing.assert_array_equal(np.asarray(w.left)[:9, 1], [0, 1, 3, 5, 6, 8, 6, 5, 3])
@@ -92,21 +107,24 @@ def test_evaluation_plays_the_song_from_its_start_and_stops():
             ends += 1
             first_notes.append(int(state.info["song_note"]))
         if t == 5 + 17:                                                   # the first song note is over
-            assert bool(state.info["note_end"]) and int(state.note) == 2
+            assert bool(state.info["note_end"]) and int(state.cursor.note) == 2
     assert ends == 9 and first_notes == list(range(-1, 8)) and bool(state.done)
 
 
-@pytest.mark.parametrize("hand,obs,columns", [("right", 2 * 16 * 13 + 35, 1), ("duet", 2 * 32 * 13 + 70, 7)])
-def test_right_and_duet_step_under_jit_and_vmap(hand, obs, columns):
+@pytest.mark.parametrize("hand,obs,columns,hands",
+                         [("right", 2 * 16 * 13 + 35, 1, 1), ("duet", 2 * 32 * 13 + 70, 7, 2)])
+def test_right_and_duet_step_under_jit_and_vmap(hand, obs, columns, hands):
     env = envs.make(hand, [chord_song()])
     state = jax.jit(jax.vmap(env.reset))(jax.random.split(jax.random.PRNGKey(0), N_ENVS))
     step = jax.jit(jax.vmap(env.step))
     for _ in range(3):
         state = step(state, jnp.zeros((N_ENVS, env.action_size)))
-    assert state.obs.shape == (N_ENVS, obs) and state.reward.shape == (N_ENVS, columns)
-    assert state.privileged.shape == (N_ENVS, 6)
-    assert np.isfinite(np.asarray(state.obs)).all() and np.isfinite(np.asarray(state.reward)).all()
+    chex.assert_shape(state.obs, (N_ENVS, obs))
+    chex.assert_shape(state.reward, (N_ENVS, columns))
+    chex.assert_shape(state.privileged, (N_ENVS, 6))
+    chex.assert_tree_all_finite((state.obs, state.reward))
+    assert env.layout.obs_size == obs and env.layout.hands == hands and env.layout.frame == 16 * 13
     # strum targets are contiguous: the C chord (strings 1-5) asks for strings 1-5, the F barre for all six
-    w = state.window
+    w = state.cursor.window
     assert np.asarray(w.pick)[0, 1:3].tolist() in ([[True] * 6, [True] * 5 + [False]],
                                                   [[True] * 5 + [False], [False] * 6])

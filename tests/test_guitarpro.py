@@ -159,14 +159,28 @@ def test_truncated_and_foreign_files(tmp_path):
     good = tmp_path / "good.gp5"
     gp.write(make_song(BASIC), str(good))
     data = good.read_bytes()
-    for n in (10, len(data) // 2, len(data) - 40):
+    (tmp_path / "cut10.gp5").write_bytes(data[:10])   # a length byte, then 9 of the 30 bytes of the version
+    with pytest.raises(SongError, match=r"cut10\.gp5:byte 10: cannot read as Guitar Pro 3/4/5: unsupported "
+                                        r"version 'FICHIER G'"):
+        read_guitarpro(tmp_path / "cut10.gp5")
+    for n in (len(data) // 2, len(data) - 40):
         bad = tmp_path / f"cut{n}.gp5"
         bad.write_bytes(data[:n])
-        with pytest.raises(SongError, match=rf"cut{n}\.gp5: cannot read as Guitar Pro"):
+        with pytest.raises(SongError, match=rf"cut{n}\.gp5:byte {n}: cannot read as Guitar Pro 3/4/5: the file "
+                                            rf"ends in the middle of the song data \(truncated\?\)"):
             read_guitarpro(bad)
     text = tmp_path / "notes.gp5"
     text.write_text("this is not a guitar pro file at all")
-    with pytest.raises(SongError, match=r"notes\.gp5: cannot read as Guitar Pro"):
+    # the first byte, 't' = 116, is taken as the length of the 30-byte version string that follows it
+    with pytest.raises(SongError, match=r"notes\.gp5:byte 31: cannot read as Guitar Pro 3/4/5: unsupported version "
+                                        r"'his is not a guitar pro file a'"):
         read_guitarpro(text)
-    with pytest.raises(SongError, match=r"missing\.gp5: cannot read"):
+    with pytest.raises(SongError, match=r"missing\.gp5: no such file"):
         read_guitarpro(tmp_path / "missing.gp5")
+
+
+def test_tempo_out_of_range(tmp_path):
+    path = tmp_path / "fast.gp5"
+    gp.write(make_song(BASIC, tempo=500), str(path))
+    with pytest.raises(SongError, match=r"fast\.gp5:track 0: tempo 500 BPM is outside 20\.\.400"):
+        read_guitarpro(path)

@@ -111,7 +111,7 @@ def test_discriminator_separates_reference_from_random_motion():
 def test_wrist_relative_features_ignore_the_wrist_pose():
     """The left fingers' discriminator sees the fingers relative to the wrist: moving and turning the whole hand
     leaves its input unchanged."""
-    from dexguitar.envs.core import quat_mul, quat_to_mat
+    from dexguitar.world.geometry import quat_mul, quat_to_mat
     rng = np.random.default_rng(1)
     links = np.zeros((IM.FRAMES, 16, 7), np.float32)
     links[..., :3] = rng.normal(0, 0.05, (IM.FRAMES, 16, 3))
@@ -127,39 +127,35 @@ def test_wrist_relative_features_ignore_the_wrist_pose():
     np.testing.assert_allclose(a, b, atol=1e-5)
 
 
-@pytest.fixture(scope="module")
-def trainer():
-    from dexguitar.learn.trainer import Trainer, TrainConfig
-    from dexguitar.motion import load_motion
-    from dexguitar.motion.kinematics import reference_frames
-    from dexguitar.music import library
-    from dexguitar.music import timeline as TL
-    cfg = TrainConfig(num_envs=4, horizon=4, minibatch=8, epochs=2, disc_steps=2, disc_buffer=64, disc_batch=16,
-                      iterations_per_call=1)
-    return Trainer(cfg, [TL.from_song(library.load("ode_to_joy"))], reference_frames(load_motion("left")))
+@pytest.fixture
+def trainer(left_trainer):
+    return left_trainer
 
 
 def test_training_iterations_and_exact_resume(trainer, tmp_path):
     chunk = trainer.make_train_chunk(1)
     start = trainer.init()
     p0 = jax.device_get(start.params)
-    first, metrics = chunk(start)
+    first, metrics = chunk(start, trainer.data)
     assert all(np.isfinite(float(v)) for k, v in metrics.items() if not k.startswith("f1/"))
+    assert all(float(v) == 0.0 for k, v in metrics.items() if k.startswith("nonfinite/"))
     changed = jax.tree.map(lambda a, b: float(np.abs(np.asarray(a) - b).max()), jax.device_get(first.params), p0)
     for net in ("policy", "critic", "disc"):
         assert max(jax.tree.leaves(changed[net])) > 0, net
     C.save(tmp_path / "ckpt", int(first.iteration), first)
     template = jax.tree.map(jnp.zeros_like, first)          # a fresh process's structure, without building it
-    uninterrupted, _ = chunk(first)
-    restored = C.restore(tmp_path / "ckpt", template)
-    assert int(restored.iteration) == 1
-    resumed, _ = chunk(restored)
+    uninterrupted, _ = chunk(first, trainer.data)
+    restored, step = C.restore(tmp_path / "ckpt", template)
+    assert int(restored.iteration) == 1 == step
+    resumed, _ = chunk(restored, trainer.data)
     same = jax.tree.map(lambda a, b: np.array_equal(np.asarray(a), np.asarray(b)), resumed, uninterrupted)
     assert all(jax.tree.leaves(same)) and int(resumed.iteration) == 2
 
 
-def test_config_weights_follow_the_paper():
+def test_weights_follow_the_paper(trainer):
+    np.testing.assert_allclose(trainer.weights, [0.15] * 6 + [0.05] * 2)     # Eq. 9, Sec. 5.1 (reference §8)
+    from dexguitar.envs import RightEnv
+    from dexguitar.learn.imitation import DISCRIMINATORS
+    assert RightEnv.reward_weights == (0.5,) and DISCRIMINATORS["right"]["hand"].weight == 0.5   # Sec. 5.2
     from dexguitar.learn.trainer import TrainConfig
-    np.testing.assert_allclose(TrainConfig().weights(6, 2), [0.15] * 6 + [0.05] * 2)    # Eq. 9, Sec. 5.1
-    np.testing.assert_allclose(TrainConfig().weights(1, 1), [0.5, 0.5])                 # Sec. 5.2
-    assert dataclasses.asdict(TrainConfig())["actor_lr"] == 5e-6                        # Table S1
+    assert dataclasses.asdict(TrainConfig())["actor_lr"] == 5e-6                            # Table S1

@@ -1,9 +1,11 @@
-"""Embedded songs: they load, are playable, and together cover the techniques the experiments need."""
+"""Embedded songs: they load, are playable, and together cover the techniques the experiments need; `load_songs`."""
+import json
 from fractions import Fraction as F
 
 import pytest
 
 from dexguitar.music import library, load_song
+from dexguitar.music.library import load_songs
 from dexguitar.music.song import MUTE, Effect, SongError
 
 EXPECTED = {"ode_to_joy", "twinkle", "greensleeves", "minuet_in_g", "spanish_romance", "rising_sun",
@@ -100,3 +102,39 @@ def test_load_by_name_and_options():
     assert song.title == "Ode to Joy" and song.tempo == 120
     slow = library.load("ode_to_joy", tempo=60)
     assert slow.tempo == 60 and slow.seconds == pytest.approx(2 * song.seconds)
+
+
+
+def tab(path, tempo):
+    """A JSON tab of one open high-E quarter note."""
+    path.write_text(json.dumps([{"tempo": tempo, "notes": [{"t": "1/4", "frets": [0, -1, -1, -1, -1, -1]}]}]))
+    return path
+
+
+def test_load_songs_files_names_and_folders(tmp_path):
+    folder = tmp_path / "set"
+    folder.mkdir()
+    tab(folder / "b.json", 90), tab(folder / "a.json", 80)
+    (folder / "notes.md").write_text("not a tab")           # no reader for .md: skipped
+    (folder / "sub.json").mkdir()                           # not a file: skipped, and not searched
+    tab(folder / "sub.json" / "c.json", 60)
+    songs = load_songs([tab(tmp_path / "one.json", 70), "twinkle", folder])
+    assert len(songs) == 4 and songs[1] == library.load("twinkle")
+    assert [s.tempo for s in songs[:1] + songs[2:]] == [70, 80, 90]        # the folder's files sorted: a, b
+    assert [s.tempo for s in load_songs([folder / "sub.json"])] == [60]     # a folder named like a tab file
+    assert load_songs([]) == []
+
+
+def test_load_songs_errors(tmp_path):
+    with pytest.raises(SongError) as info:
+        load_songs([tmp_path / "missing.json"])
+    assert str(info.value) == f"{tmp_path / 'missing.json'}: no such file, folder or embedded song"
+    with pytest.raises(SongError, match=r"^no_such_song: no such file, folder or embedded song$"):
+        load_songs(["no_such_song"])
+    empty = tmp_path / "x.json"
+    empty.mkdir()
+    (empty / "readme.md").write_text("")
+    with pytest.raises(SongError) as info:
+        load_songs([empty])
+    assert str(info.value) == (f"{empty}: no tab files (.json, .txt, .tab, .gp3, .gp4, .gp5, .mid, .midi) "
+                               f"in this folder")

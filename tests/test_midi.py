@@ -108,13 +108,15 @@ def test_track_selection_and_tempo_option(tmp_path):
 def test_not_a_midi_file(tmp_path):
     path = tmp_path / "fake.mid"
     path.write_text("MThd? no, just text")
-    with pytest.raises(SongError, match=r"fake\.mid: cannot read as a MIDI file") as info:
+    # "MThd" then "? no" read as the header length (big-endian 0x3f206e6f): the 19-byte file ends inside it
+    with pytest.raises(SongError, match=r"fake\.mid:byte 19: cannot read as a MIDI file: it ends in the middle"
+                       ) as info:
         read_midi(path)
     assert info.value.path == path
     good = write_midi(tmp_path / "good.mid", [[(0, TPB, 60)] * 1])
     cut = tmp_path / "cut.mid"
     cut.write_bytes(good.read_bytes()[:20])
-    with pytest.raises(SongError, match=r"cut\.mid: cannot read as a MIDI file"):
+    with pytest.raises(SongError, match=r"cut\.mid:byte 20: cannot read as a MIDI file: it ends in the middle"):
         read_midi(cut)
 
 
@@ -143,3 +145,16 @@ def test_bad_options(tmp_path):
     with pytest.raises(SongError, match="tempo"):
         read_midi(path, tempo=-1)
     assert read_midi(path, grid="16").notes[0].duration == Fraction(1, 4)
+
+
+def test_tempo_and_durations_out_of_range(tmp_path):
+    # 6,000,000 us per beat = 10 BPM, below 20; the set_tempo event is at tick 0, in bar 1
+    slow = write_midi(tmp_path / "slow.mid", [[(0, TPB, 60)]], tempo_bpm=10)
+    with pytest.raises(SongError, match=r"slow\.mid:tick 0, bar 1: tempo 10 BPM is outside 20\.\.400"):
+        read_midi(slow)
+    with pytest.raises(SongError, match=r"slow\.mid: tempo option: tempo 1000 BPM is outside 20\.\.400"):
+        read_midi(slow, tempo=1000)
+    # a 1/1024 grid at 120 BPM: one step lasts 14400 / 120 / 1024 = 0.12 frames, so a one-step note is refused
+    blip = write_midi(tmp_path / "blip.mid", [[(0, 1, 60)]])
+    with pytest.raises(SongError, match=r"blip\.mid:note 0: this note \(duration 1/1024\) lasts 0\.12 frames"):
+        read_midi(blip, grid="1/1024")

@@ -72,11 +72,8 @@ def test_synchronize(tmp_path):
     assert "[after synchronization] two notes and a chord" in out
 
 
-def test_play_and_listen(tmp_path):
-    proc = run_notebook("play_and_listen", tmp_path)
-    if proc.returncode != 0 and "no offscreen OpenGL" in proc.stderr:
-        pytest.skip("no offscreen OpenGL (install libosmesa6)")
-    out = check(proc)
+def test_play_and_listen(tmp_path, offscreen_gl):
+    out = check(run_notebook("play_and_listen", tmp_path))
     prefix = tmp_path / "out" / "demo"
     assert prefix.with_suffix(".wav").stat().st_size > 44
     assert prefix.with_suffix(".mp4").exists() or prefix.with_suffix(".png").exists()

@@ -1,5 +1,6 @@
 """Performance output: string synthesis pitch, the audio mix, string colours, WAV files, per-note verdicts, the duet
-observation split and (when an offscreen GL is there) rendering. No env rollout: everything runs on hand-made data."""
+observation split, the caption's running F1, rendering (`offscreen_gl`: skipped without an offscreen GL, failed under
+CI) and the no-GL fallback. No env rollout: everything runs on hand-made data. The stage itself: test_stage.py."""
 import numpy as np
 import pytest
 
@@ -129,20 +130,31 @@ def test_second_pick_turns_green_red():
 
 # ------------------------------------------------------------------------------------------------ play
 
-def test_split_obs_matches_hand_layout():
+def test_an_unsynchronized_pair_acts_as_each_hand_alone(tmp_path):
+    """`play.pair`: two single-hand exports played as a synchronizer with a zero output layer give each hand's own
+    action on its own slice of the duet observation (frame t = [left 208 | right 208], then the two goals)."""
+    import jax
     import jax.numpy as jnp
 
-    from dexguitar.perform.play import joint_act, split_obs
-    hist = np.arange(2 * 416, dtype=np.float32).reshape(2, 416)     # frame-major, left 208 first in each frame
-    goal_l, goal_r = np.full(35, -1.0, np.float32), np.full(35, -2.0, np.float32)
-    obs = jnp.asarray(np.concatenate([hist.reshape(-1), goal_l, goal_r]))
-    left, right = split_obs(obs)
-    assert np.array_equal(left, np.concatenate([hist[:, :208].reshape(-1), goal_l]))
-    assert np.array_equal(right, np.concatenate([hist[:, 208:].reshape(-1), goal_r]))
-    batch = split_obs(jnp.stack([obs, obs]))[1]
-    assert batch.shape == (2, 451) and np.array_equal(batch[1], right)
-    act = joint_act(lambda o: o[..., :27], lambda o: o[..., -27:])
-    assert np.array_equal(act(obs), np.concatenate([left[:27], right[-27:]]))
+    from dexguitar.learn import networks as N
+    from dexguitar.learn import policy as PO
+    from dexguitar.perform.play import pair
+    hands = {}
+    for i, hand in enumerate(("left", "right")):
+        params = {"policy": N.init_params(N.Policy(27), jax.random.PRNGKey(i), (2, 208), (35,)),
+                  "obs_norm": N.normalizer_init(208)}
+        params["policy"] = jax.tree.map(lambda x: x + 0.05, params["policy"])       # the latent matters
+        PO.export(tmp_path / hand, params, {"hand": hand, "action_size": 27, "goal_size": 35, "obs_size": 451})
+        hands[hand] = PO.load(tmp_path / hand)[0]
+    params, spec = pair(tmp_path / "left", tmp_path / "right")
+    obs = jax.random.normal(jax.random.PRNGKey(5), (3, 902))
+    both = PO.make_act(params, spec)(obs)
+    frames = obs[:, :832].reshape(3, 2, 2, 208)
+    for i, (hand, goal) in enumerate((("left", obs[:, 832:867]), ("right", obs[:, 867:]))):
+        p = hands[hand]
+        alone, _ = N.Policy(27).apply(p["policy"], N.normalize(p["obs_norm"], frames[:, :, i]), goal)
+        np.testing.assert_allclose(both[:, 27 * i:27 * (i + 1)], alone, atol=1e-6)
+    assert float(jnp.abs(both).max()) > 1e-3
 
 
 def hand_made_performance():
@@ -191,20 +203,42 @@ def test_note_verdicts():
     assert names[67][1] == "red" and names[66][1] == "grey"
 
 
-def test_perform_writes_outputs_without_ffmpeg(tmp_path, monkeypatch):
-    """perform end to end on the hand-made recording (no rollout): PNG sheet, WAV and JSON report."""
-    import json
+def test_running_f1_and_caption():
+    import dataclasses
 
+    from dexguitar.perform.play import caption, note_verdicts, running_f1
+    song, rec = hand_made_performance()
+    rows = note_verdicts(rec, song)
+    notes, f1 = running_f1(rows, len(rec["press"]))
+    # both-hands F1 of the notes that end at frames 34, 64, 94 (right, late, wrong: 1, 0, 0); the rest at 124 has
+    # no target and no pick, so it does not count
+    assert notes[33] == 0 and np.isnan(f1[33])
+    assert (notes[34], f1[34]) == (1, 1.0) and (notes[63], f1[63]) == (1, 1.0)
+    assert (notes[64], f1[64]) == (2, 0.5)
+    assert notes[94] == 3 and f1[94] == pytest.approx(1 / 3)
+    assert notes[-1] == 3 and f1[-1] == pytest.approx(1 / 3)
+    text = caption(dataclasses.replace(song, title="Four notes"), notes[64], f1[64]).splitlines()
+    assert text == ["Four notes", "120 bpm", "F1 both hands: 0.500 (2 notes)"]
+    assert caption(song, 0, float("nan")).endswith("F1 both hands: -")
+
+
+def perform_hand_made(tmp_path, monkeypatch, **kw):
+    """perform on the hand-made recording (its `play` replaced: no rollout)."""
     from dexguitar.perform import play as P
     from dexguitar.world import scene as S
     song, rec = hand_made_performance()
     T = len(rec["press"])
     rec.update(qpos=np.tile(S.build_model("duet").key_qpos[0], (T, 1)), frames=T, rollout_seconds=0.0)
     monkeypatch.setattr(P, "play", lambda *a, **k: rec)
-    try:
-        report = P.perform(song, out_prefix=tmp_path / "perf", act=lambda obs: obs, video=False, quiet=True)
-    except RuntimeError as err:
-        pytest.skip(f"no offscreen OpenGL: {err}")
+    return P.perform(song, None, None, out_prefix=tmp_path / "perf", **kw), T
+
+
+def test_perform_writes_outputs_without_ffmpeg(tmp_path, monkeypatch, offscreen_gl):
+    """perform end to end on the hand-made recording (no rollout): PNG sheet, WAV and JSON report."""
+    import json
+
+    from dexguitar.perform import play as P
+    report, T = perform_hand_made(tmp_path, monkeypatch, video=False, quiet=True)
     assert report["counts"] == {"right": 1, "late": 1, "wrong": 1, "rest": 1}
     assert report["summary"]["both"]["f1"] == pytest.approx(1 / 3)
     saved = json.loads((tmp_path / "perf-report.json").read_text())
@@ -214,24 +248,74 @@ def test_perform_writes_outputs_without_ffmpeg(tmp_path, monkeypatch):
     assert "late" in P.format_report(report)
 
 
+def test_perform_without_gl_writes_audio_and_report(tmp_path, monkeypatch, capsys):
+    """No offscreen OpenGL (the context creation fails): the WAV, the report and the per-note table are written
+    all the same, and one line says what to install."""
+    import json
+
+    from dexguitar.motion import glcheck
+
+    def no_gl(width, height):
+        raise glcheck.NoGL("no offscreen OpenGL (test)")
+    monkeypatch.setattr(glcheck, "gl_context", no_gl)
+    report, T = perform_hand_made(tmp_path, monkeypatch, video=False)     # (no ffmpeg needed for the PNG path)
+    out, err = capsys.readouterr()
+    assert err.strip().splitlines() == [
+        "no offscreen OpenGL: apt-get install libosmesa6 (or an EGL driver), then run again for the video"]
+    assert "late" in out and "verdicts: right 1, late 1, wrong 1, rest 1" in out
+    assert set(report["files"]) == {"audio", "report"}
+    assert not (tmp_path / "perf.mp4").exists() and not (tmp_path / "perf.png").exists()
+    assert json.loads((tmp_path / "perf-report.json").read_text())["counts"]["late"] == 1
+    assert len(A.read_wav(tmp_path / "perf.wav")[0]) == round(T / 60 * FS)
+
+
+def test_video_captions_end_on_the_report(tmp_path, monkeypatch):
+    """30 fps from the 60 Hz recording: a video frame's caption counts the notes judged by the end of the time it
+    shows, so an odd-length recording still ends on the report's F1."""
+    from pathlib import Path
+
+    from dexguitar.perform import video as V
+    seen = {}
+    monkeypatch.setattr(V, "have_ffmpeg", lambda: True)
+    monkeypatch.setattr(V, "render_video", lambda model, q, c, out, **k: seen.update(k, q=q) or Path(out))
+    report, T = perform_hand_made(tmp_path, monkeypatch, captions=True, quiet=True)
+    both = report["summary"]["both"]
+    assert T % 2 == 1 and len(seen["captions"]) == len(seen["q"]) == (T + 1) // 2
+    assert seen["captions"][0].endswith("F1 both hands: -")
+    assert seen["captions"][-1].endswith(f"F1 both hands: {both['f1']:.3f} ({both['notes']} notes)")
+    assert both["notes"] == 3
+
+
+def test_play_options(monkeypatch):
+    """`dexguitar play` passes the video options on: 1280 x 720 at 30 fps from the front by default."""
+    from dexguitar import cli
+    seen = {}
+    monkeypatch.setattr(cli.PL, "perform", lambda *a, **k: seen.update(k) or {})
+    monkeypatch.setattr(cli.PL, "pair", lambda left, right: ({}, None))
+    assert cli.main(["play", "--left", "L", "--right", "R", "--song", "s"]) == 0
+    assert (seen["width"], seen["height"], seen["video_fps"], seen["camera"], seen["captions"]) == (
+        1280, 720, 30.0, "front", False)
+    assert cli.main(["play", "--left", "L", "--right", "R", "--song", "s", "--camera", "closeup", "--caption",
+                     "--size", "640x360"]) == 0
+    assert (seen["width"], seen["height"], seen["camera"], seen["captions"]) == (640, 360, "closeup", True)
+    assert cli.main(["play", "--left", "L", "--song", "s"]) == 2                  # a pair needs both hands
+
+
 # ------------------------------------------------------------------------------------------------ rendering
 
 @pytest.fixture(scope="module")
 def duet_model():
-    from dexguitar.world import scene as S
-    return S.build_spec("duet", visual=True).compile()
+    from dexguitar.world import stage
+    return stage.stage_model("duet")
 
 
-def test_render_frames_png_colours_strings(tmp_path, duet_model):
+def test_render_frames_png_colours_strings(tmp_path, duet_model, offscreen_gl):
     from dexguitar.motion.render import png_size
     from dexguitar.perform.video import SceneRenderer, render_frames_png
     q = np.tile(duet_model.key_qpos[0], (2, 1))
     grey = np.tile(C.GREY, (6, 1))
-    try:
-        with SceneRenderer(duet_model, 160, 90) as r:
-            plain, red = r.frame(q[0], grey), r.frame(q[0], np.tile(C.RED, (6, 1)))
-    except RuntimeError as err:
-        pytest.skip(f"no offscreen OpenGL: {err}")
+    with SceneRenderer(duet_model, 160, 90) as r:
+        plain, red = r.frame(q[0], grey), r.frame(q[0], np.tile(C.RED, (6, 1)))
     assert plain.std() > 5                                            # the scene, not a blank (camera) image
     diff = np.abs(red.astype(int) - plain.astype(int)).sum(-1) > 30
     assert diff.any()                                                  # the strings take the colour
@@ -259,18 +343,19 @@ def test_render_video_needs_ffmpeg_or_says_so(tmp_path, duet_model, monkeypatch)
         V.render_video(duet_model, q, None, tmp_path / "v.mp4")
 
 
-def test_render_video_with_audio(tmp_path, duet_model):
+def test_render_video_with_audio(tmp_path, duet_model, offscreen_gl):
     imageio_ffmpeg = pytest.importorskip("imageio_ffmpeg")
+    import re
     import subprocess
 
     from dexguitar.perform import video as V
     wav = A.write_wav(tmp_path / "a.wav", A.render_audio([(0.0, 1, 0)], 0.1), FS)
-    q = np.tile(duet_model.key_qpos[0], (6, 1))
-    try:
-        out = V.render_video(duet_model, q, np.tile(C.GREEN, (6, 6, 1)), tmp_path / "v.mp4", fps=60, audio=wav,
-                             width=64, height=48)
-    except RuntimeError as err:
-        pytest.skip(f"no offscreen OpenGL: {err}")
+    q = np.tile(duet_model.key_qpos[0], (7, 1))           # 7 / 60 s of picture, longer than the 0.1 s of sound
+    out = V.render_video(duet_model, q, np.tile(C.GREEN, (7, 6, 1)), tmp_path / "v.mp4", fps=60, audio=wav,
+                         width=64, height=48, camera="closeup", captions=["a caption"] * 7)
     probe = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-i", str(out)], check=False,
                            capture_output=True, text=True).stderr
     assert "Video: h264" in probe and "Audio: aac" in probe
+    count = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-i", str(out), "-map", "0:v", "-f", "null", "-"],
+                           check=False, capture_output=True, text=True).stderr
+    assert re.findall(r"frame=\s*(\d+)", count)[-1] == "7"       # every frame, the last one too

@@ -1,14 +1,21 @@
 import re
+from collections import Counter
 from fractions import Fraction
+
+import numpy as np
 
 import pytest
 
-from dexguitar.music.procedural import (CHORD_SHAPES, SHAPES_BY_NAME, chord_positions, coverage, left_exercises,
-                                        right_patterns, scale_positions, scale_run, shape_name)
+from dexguitar.music import coverage as cov
+from dexguitar.music.procedural import (CHORD_SHAPES, FAMILIES, GENERAL_KINDS, LINE_SCALES, SHAPES_BY_NAME,
+                                        chord_positions, chord_voicings, coverage, draw_voicing, finger_groups,
+                                        left_exercises, left_general, right_patterns, scale_positions, scale_run,
+                                        shape_name)
 from dexguitar.music.song import Effect, Song
 from dexguitar.world.guitar import GUITAR
 
 MUTE = -1
+X = MUTE
 MAJOR = (0, 2, 4, 5, 7, 9, 11)
 BUCKETS = ((1, 5), (6, 10), (11, 15), (16, 22))
 
@@ -21,6 +28,11 @@ def left():
 @pytest.fixture(scope="module")
 def right():
     return right_patterns(7, 200)
+
+
+@pytest.fixture(scope="module")
+def general():
+    return left_general(7, 20 * len(GENERAL_KINDS))
 
 
 def pressed_ok(frets):
@@ -229,3 +241,141 @@ def test_paper_right_patterns_follow_the_authors_distribution():
     assert len(sets) == 21
     # 1200 notes over 21 sets: about 57 each; a uniform draw stays within +-50% with overwhelming probability
     assert min(sets.values()) > 28 and max(sets.values()) < 86
+
+
+# ------------------------------------------------------------------------------------------------ left_general
+
+def kind_of(song):
+    """The kind in a title such as "left-general-4 (pedal 5)" or "left-general-6 (line C# major)"."""
+    label = song.title.split("(")[1].rstrip(")")
+    return next(k for k in GENERAL_KINDS if label == k or label.startswith(k + " "))
+
+
+def frames(song, note):
+    return note.duration * 14400 / Fraction(song.tempo)  # 4 beats of 60 s at 60 frames/s per whole note
+
+
+def test_general_is_deterministic_per_seed():
+    assert left_general(3, 9) == left_general(3, 9)
+    assert left_general(3, 9) != left_general(4, 9)
+    assert left_general(3, 9)[:4] == left_general(3, 4)
+
+
+def test_general_songs_are_well_formed(general):
+    kinds = list(GENERAL_KINDS)
+    assert len(general) == 20 * len(kinds)
+    for i, song in enumerate(general):
+        assert len(song.notes) == 40 and song.title.startswith(f"left-general-{i} (")
+        assert kind_of(song) == kinds[i % len(kinds)]            # the kinds take turns: each 20 songs
+        assert 50 <= song.tempo <= 225
+        assert all(frames(song, n) >= 4.5 for n in song.notes)    # >= 5 frames once rounded
+    shortest = [round(min(frames(s, n) for n in s.notes if not n.is_rest)) for s in general]
+    assert set(range(5, 16)) <= set(shortest)                     # the official songs' 5..15 frames, all of them
+    assert sum(5 <= f <= 15 for f in shortest) >= 0.95 * len(shortest)
+    tempos = [s.tempo for s in general]
+    assert min(tempos) <= 60 and max(tempos) >= 200
+
+
+def test_finger_groups_by_hand():
+    assert finger_groups((1, 1, 2, 3, 3, 1)) == 3    # F barre: strings 1, 2, 6 under the index finger
+    assert finger_groups((0, 1, 0, 2, 3, X)) == 3    # open C
+    assert finger_groups((3, 0, 0, 0, 2, 3)) == 3    # open G: the open strings split the two frets 3
+    assert finger_groups((1, 2, 1, 2, 1, X)) == 3    # 1s share a barre; the 2s are split by the 1 between
+    assert finger_groups((1, 2, 3, 4, 2, 1)) == 4
+    assert finger_groups((2, 1, 2, 3, 4, X)) == 5    # the 1 splits the two 2s
+    assert finger_groups((X, 0, X, 0, X, X)) == 0
+
+
+def test_chord_voicings():
+    voicings = chord_voicings()
+    names = {v.frets: v.name for v in voicings}
+    assert len(names) == len(voicings) > 10000
+    for frets, name in {(0, 1, 0, 2, 3, X): "C", (3, 0, 0, 0, 2, 3): "G", (2, 3, 2, 0, X, X): "D",
+                        (0, 2, 2, 2, 0, X): "A", (0, 1, 2, 2, 0, X): "Am", (0, 0, 0, 2, 2, 0): "Em",
+                        (0, 0, 1, 2, 2, 0): "E", (1, 3, 2, 0, X, X): "Dm", (1, 1, 2, 3, 3, 1): "F",
+                        (2, 3, 4, 4, 2, X): "Bm", (X, X, X, 5, 5, 3): "G5", (2, 1, 2, 1, X, X): "Cdim7",
+                        (15, 15, 16, 17, 17, 15): "G", (8, 8, 9, X, X, X): "C"}.items():
+        assert names.get(frets) == name, frets                    # (8, 8, 9): C in first inversion, E G C
+    pitch = GUITAR.pitch_table
+    for v in voicings:
+        strings = [i for i, f in enumerate(v.frets) if f != X]
+        pressed = [f for f in v.frets if f > 0]
+        assert len(strings) >= 3 and strings == list(range(strings[0], strings[-1] + 1)), v
+        assert pressed and max(pressed) <= 22 and max(pressed) - min(pressed) <= 3, v
+        assert finger_groups(v.frets) <= 4
+    families = Counter(v.family for v in voicings)
+    assert set(families) == set(FAMILIES) and min(families.values()) > 100
+    by_name = {v.frets: v.family for v in voicings}
+    assert [by_name[f] for f in ((X, X, X, 5, 5, 3), (3, 0, 0, 0, 2, 3), (X, X, 9, 0, 11, X), (8, 8, 9, X, X, X),
+                                 (2, 1, 2, 1, X, X), (1, 1, 2, 3, 3, 1))] == list(FAMILIES)
+    g7 = {int(pitch[i, f]) % 12 for i, f in enumerate((1, 0, 0, 0, 2, 3))}
+    assert names[(1, 0, 0, 0, 2, 3)] == "G7" and g7 == {7, 11, 2, 5}
+
+
+def test_general_is_playable(general):
+    import jax
+    import numpy as np
+
+    from dexguitar.envs.rewards import finger_order
+    goals = set()
+    for song in general:
+        for note in song.notes:
+            pressed_ok(note.frets)
+            if note.chord is not None:
+                pressed_ok(note.chord)
+                assert all(c == f for f, c in zip(note.frets, note.chord) if f != MUTE)
+            tied = [i for i, e in enumerate(note.effects) if e != Effect.NONE]
+            assert all(note.frets[i] != MUTE for i in tied)       # a tied string keeps sounding
+            goals.add(cov.goal(note))
+    goals = np.array(sorted(goals), dtype=np.int32)
+    allowed = np.asarray(jax.jit(jax.vmap(finger_order))(goals))  # the reward's own rule: (goals, 6, 4)
+    pressed = goals > 0
+    assert np.all(allowed.any(axis=-1) == pressed)                # every pressed string has a finger
+    assert len(goals) > 1000
+
+
+def test_general_balance(general):
+    rng = np.random.default_rng(0)
+    cells = Counter((cov.bucket(v.position), v.family) for v in (draw_voicing(rng) for _ in range(4800)))
+    # Neck regions uniform (1200 draws each), then the families found there: all 6 in frets 1-5 (200 each), all
+    # but the open position higher up (240 each).
+    assert len(cells) == 6 + 3 * 5
+    for (region, _), c in cells.items():
+        expect = 200 if region == "1-5" else 240
+        assert 0.75 * expect <= c <= 1.25 * expect, cells
+    goals = [g for s in general for g in cov.song_goals(s)]
+    held = [g for g in goals if cov.pressed(g)]
+    regions = Counter(cov.bucket(cov.position(g)) for g in held)
+    assert all(0.18 <= regions[b] / len(held) <= 0.32 for b in ("1-5", "6-10", "11-15", "16-22")), regions
+    assert 0.02 <= 1 - len(held) / len(goals) <= 0.15               # notes on open strings only
+    chords = Counter(len(cov.pressed(g)) for g in goals if cov.is_chord(g))
+    assert all(chords[k] >= 0.05 * sum(chords.values()) for k in range(2, 7)), chords
+    jumps = [j for s in general for j in cov.jumps(cov.song_goals(s))]
+    assert sum(j <= 2 for j in jumps) >= 0.5 * len(jumps)           # mostly small moves ...
+    assert sum(j >= 7 for j in jumps) >= 0.05 * len(jumps)          # ... and long shifts
+
+
+def test_general_lines_and_voices_stay_in_their_scale_across_the_neck(general):
+    pitch = GUITAR.pitch_table
+    names = ("C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B")
+    frets = set()
+    for song in (s for s in general if kind_of(s) in ("line", "voices")):
+        kind, root, scale = re.match(r".*\((line|voices) (\S+) (.+)\)$", song.title).groups()
+        for note in (n for n in song.notes if not n.is_rest):
+            if kind == "line":
+                assert len(note.played) == 1
+            else:  # one or two melody notes on strings 1-3, at most one bass note on strings 4-6
+                assert 1 <= sum(s <= 3 for s in note.played) <= 2 and sum(s >= 4 for s in note.played) <= 1
+            for string in note.played:
+                fret = note.frets[string - 1]
+                frets.add(fret)
+                assert (int(pitch[string - 1, fret]) - names.index(root)) % 12 in LINE_SCALES[scale], song.title
+    assert 0 in frets and max(frets) >= 20
+
+
+def test_general_pedal_stays_below_the_figure(general):
+    for song in (s for s in general if kind_of(s) == "pedal"):
+        pedal = int(song.title.rstrip(")").split()[-1])
+        for note in song.notes:
+            assert note.frets[pedal - 1] in (MUTE, 0)
+            assert all(s <= pedal for s in note.played), (song.title, note.frets)

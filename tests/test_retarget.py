@@ -167,13 +167,13 @@ def test_csv_reader_errors(tmp_path):
     assert np.isnan(m.get("L-B1")).all()                      # absent markers read as missing
 
     f.write_text(f"{head}\n{good}\n{','.join(['1.0'] * 14)}\n")
-    with pytest.raises(RT.RetargetError, match=r"tiny\.csv: line 3: 14 fields, expected 15"):
+    with pytest.raises(RT.RetargetError, match=r"tiny\.csv:line 3: 14 fields, expected 15"):
         RT.read_markers(f)
     f.write_text(f"{head}\n{good}\n{','.join(['1.0'] * 13 + ['abc', '1'])}\n")
-    with pytest.raises(RT.RetargetError, match=r"tiny\.csv: line 3, column 14 \(R-B1-Y\): 'abc' is not a number"):
+    with pytest.raises(RT.RetargetError, match=r"tiny\.csv:line 3, column 14 \(R-B1-Y\): 'abc' is not a number"):
         RT.read_markers(f)
     f.write_text(head.replace("Marker2-Y", "Marker2-Q") + f"\n{good}\n")
-    with pytest.raises(RT.RetargetError, match=r"line 1, column 5: 'Marker2-Q'; expected Marker2-Y"):
+    with pytest.raises(RT.RetargetError, match=r"tiny\.csv:line 1, column 5: 'Marker2-Q'; expected Marker2-Y"):
         RT.read_markers(f)
     f.write_text(",".join(f"R-B1-{a}" for a in "XYZ") + "\n1,2,3\n")
     with pytest.raises(RT.RetargetError, match="guitar marker"):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from dexguitar.envs import rewards as R
-from dexguitar.perform import metrics as M
+from dexguitar.envs import scoring as M
 from dexguitar.world.guitar import GUITAR
 
 MUTE_ALL = jnp.zeros(6, jnp.int32)
@@ -88,11 +88,28 @@ def test_downward_sweep_over_the_target_strings_succeeds():
     targets = jnp.array([False, False, False, True, True, True])
     none = jnp.zeros(6, bool)
     ready = jnp.ones(6, bool)
-    picked, wrong, done, ok = R.pick_update(p0, p1, targets, none, jnp.ones(6, bool), ready, 0.001)
+    picked, wrong, early, done, ok = R.pick_update(p0, p1, targets, none, jnp.ones(6, bool), ready, 0.001)
     assert np.asarray(picked).tolist() == [False, False, False, True, True, True]
     assert not np.any(np.asarray(wrong)) and np.all(np.asarray(done) == np.asarray(targets))
+    assert not np.any(np.asarray(early))
     r = R.pick_reward(picked, wrong, targets, done, ok, ready, R.pick_distances(p1))
     assert float(r) == 1.0                                                    # Eq. 11: r_succ
+
+
+def test_a_pick_before_the_left_hand_is_ready_is_early_not_a_picking_error():
+    # the same stroke in the duet while the left hand does not hold strings 4-6 yet (the strict gate)
+    y, z = -0.33, GUITAR.string_z - 0.003
+    p0 = jnp.array([_x_at(6, y) - 0.005, y, z])
+    p1 = jnp.array([_x_at(4, y) + 0.003, y, z])
+    targets = jnp.array([False, False, False, True, True, True])
+    picked, wrong, early, done, ok = R.pick_update(p0, p1, targets, jnp.zeros(6, bool), jnp.ones(6, bool),
+                                                   jnp.zeros(6, bool), 0.001)
+    assert not np.any(np.asarray(wrong))                                      # the right hand picked right ...
+    assert np.asarray(early).tolist() == [False, False, False, True, True, True]   # ... before the left hand
+    assert np.asarray(ok).tolist() == [True, True, True, False, False, False]  # the reward's clean bits drop
+    # the reward treats the early strings as wrong: r_plus = min over them of r_d(distance) < 1
+    r = R.pick_reward(picked, wrong | early, targets, done, ok, jnp.zeros(6, bool), R.pick_distances(p1))
+    assert float(r) < 0.25
 
 
 def test_picking_a_non_target_and_skipping_a_target_are_wrong():
@@ -101,8 +118,8 @@ def test_picking_a_non_target_and_skipping_a_target_are_wrong():
     # starting between strings 5 and 4 and sweeping down picks 4, skips 6 and 5 (behind) and also hits 3
     p0 = jnp.array([(_x_at(5, y) + _x_at(4, y)) / 2, y, z])
     p1 = jnp.array([(_x_at(3, y) + _x_at(2, y)) / 2, y, z])
-    picked, wrong, done, ok = R.pick_update(p0, p1, targets, jnp.zeros(6, bool), jnp.ones(6, bool),
-                                            jnp.ones(6, bool), 0.0)
+    picked, wrong, early, done, ok = R.pick_update(p0, p1, targets, jnp.zeros(6, bool), jnp.ones(6, bool),
+                                                   jnp.ones(6, bool), 0.0)
     assert np.asarray(picked).tolist() == [False, False, True, True, False, False]
     assert np.asarray(wrong).tolist() == [False, False, True, False, True, True]
     r = R.pick_reward(picked, wrong, targets, done, ok, jnp.ones(6, bool), R.pick_distances(p1))

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from dexguitar import envs
+from dexguitar.motion.planner import Notes, ScriptedLeft, ScriptedPlayer, ScriptedRight
 from dexguitar.music import timeline as TL
 from dexguitar.music.song import Song, make_note
-from dexguitar.perform.scripted import Notes, ScriptedLeft, ScriptedRight
 
 # (string, fret) single notes in first position: open strings, same-string steps up and down, string changes,
 # strings 1 to 6. An open string first: from the home pose (hand at fret 5) the hand needs ~10 frames to get there.
@@ -29,7 +29,6 @@ def timeline():
 
 
 def play(hand, timeline):
-    from dexguitar.perform.scripted import ScriptedPlayer
     env = envs.make(hand, [timeline], envs.EnvConfig().evaluation())
     result = ScriptedPlayer(env).play(0)
     assert result["closed"] == len(MELODY) == result["notes"]         # every note closed exactly once

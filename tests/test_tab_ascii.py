@@ -1,11 +1,13 @@
 """ASCII tab reader: expected notes worked out by hand from the tab text."""
 from fractions import Fraction as F
 
+import numpy as np
 import pytest
 
 from dexguitar.music import load_song
 from dexguitar.music.song import MUTE, Effect, SongError
 from dexguitar.music.tab_ascii import parse_ascii_tab, read_ascii_tab
+from dexguitar.music.timeline import from_song
 
 N, H, P, S, T = Effect.NONE, Effect.HAMMER, Effect.PULL, Effect.SLIDE, Effect.TIE
 X = MUTE
@@ -209,6 +211,34 @@ def test_malformed_input_names_file_and_line(tmp_path, text, line, fragment):
     assert "bad_song.txt" in message
     assert f"line {line}" in message
     assert fragment in message
+
+
+def test_tie_across_bars_into_a_long_note():
+    text = """\
+tempo: 60
+e|0---------------|(0)-------------|----------------|
+B|----------------|----------------|----------------|
+G|----------------|----------------|----------------|
+D|----------------|----------------|----------------|
+A|----------------|----------------|----------------|
+E|----------------|----------------|----------------|
+"""
+    # 16 columns of 1/16 per bar: the open E lasts bar 1 (1 whole note), the tie from its '(' to the end (2 bars)
+    song = parse_ascii_tab(text)
+    assert [(n.duration, n.frets[0], n.effects[0]) for n in song.notes] == [(1, 0, N), (2, 0, T)]
+    # at 60 BPM a whole note is 4 s = 240 frames
+    assert np.asarray(from_song(song).onset).tolist() == [0, 240, 720]
+
+
+@pytest.mark.parametrize("header, where, fragment", [
+    ("tempo: 1000", "line 1, column 8", "tempo 1000 BPM is outside 20..400"),
+    # 1/512 at 120 BPM: 14400 / 120 / 512 = 0.23 frames, under one frame
+    ("grid: 1/512", "note 0", "this note (duration 1/512) lasts 0.23 frames at 120 BPM"),
+])
+def test_absurd_tempo_and_grid(header, where, fragment):
+    with pytest.raises(SongError) as info:
+        parse_ascii_tab(header + "\n" + "e|0|\nB|-|\nG|-|\nD|-|\nA|-|\nE|-|\n", path="odd.txt")
+    assert info.value.where == where and fragment in str(info.value)
 
 
 def test_error_column_and_no_systems():

@@ -143,7 +143,12 @@ def test_snow_hand_read():
     ([{"tempo": 90}], "track 0", "missing key 'notes'"),
     ([{"notes": []}], "track 0", "missing key 'tempo'"),
     ([{"tempo": 90, "notes": []}], "track 0", "'notes' is empty"),
-    ([{"tempo": -5, "notes": [note("1/4", [0] * 6)]}], "track 0", "'tempo' must be a positive"),
+    ([{"tempo": -5, "notes": [note("1/4", [0] * 6)]}], "track 0", "'tempo': tempo -5 BPM is outside 20..400"),
+    ([{"tempo": "fast", "notes": [note("1/4", [0] * 6)]}], "track 0", "'tempo' must be a number"),
+    ([{"tempo": 401, "notes": [note("1/4", [0] * 6)]}], "track 0", "'tempo': tempo 401 BPM is outside 20..400"),
+    # 1/256 at 60 BPM: 14400 / 60 / 256 = 0.94 frames, under one frame
+    ([{"tempo": 60, "notes": [note("1/4", [0] * 6), note("1/256", [0] * 6)]}], "track 0, note 1",
+     "this note (duration 1/256) lasts 0.94 frames at 60 BPM"),
     ([{"tempo": 90, "notes": [note("1/4", [0] * 6), note("1/4", [0] * 5)]}], "track 0, note 1",
      "'frets' must be 6 integers"),
     ([{"tempo": 90, "notes": [note("1/4", [0, 0, 0, 0, 0, "3"])]}], "track 0, note 0", "'frets' must be 6 integers"),
@@ -194,5 +199,9 @@ def test_bad_top_level_and_track(tmp_path):
         read_json_tab(write_tracks(tmp_path / "b.json", []))
     with pytest.raises(SongError, match="track 3 does not exist"):
         read_json_tab(write_tracks(tmp_path / "c.json", SMALL), track=3)
-    with pytest.raises(SongError, match="cannot read"):
+    with pytest.raises(SongError, match=r"missing\.json: no such file"):
         read_json_tab(tmp_path / "missing.json")
+    latin1 = tmp_path / "latin1.json"
+    latin1.write_bytes('[{"title": "Caf\xe9"}]'.encode("latin-1"))    # e-acute is byte 15, one byte in Latin-1
+    with pytest.raises(SongError, match=r"latin1\.json:byte 15: not UTF-8 text"):
+        read_json_tab(latin1)

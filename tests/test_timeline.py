@@ -1,16 +1,14 @@
-"""Timeline: frame rounding, goal encodings, augmentation, batching and jit. Expected numbers are worked by hand."""
+"""Timeline: frame rounding, timing limits, goal codes, padding and batching. Expected numbers are worked by hand.
+The song cursor (windows, re-timing, fret shift, goals, jit) is tested in test_cursor.py."""
 from fractions import Fraction as F
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from dexguitar.music import timeline as tlm
-from dexguitar.music.song import MUTE as M, Effect, Song, make_note
-from dexguitar.music.timeline import (
-    from_song, frames_left, frames_per_whole, left_goal, note_at, random_shift, random_tempo, retime, right_goal,
-    shift, shift_range, stack)
+from dexguitar.music.song import MUTE as M, Effect, Song, SongError, make_note
+from dexguitar.music.timeline import batch, fret_code, from_song, frames_per_whole, goal_vector, pad, stack, timer_code
 
 X = M  # shorthand in fret tuples: string not played
 
@@ -54,9 +52,6 @@ def test_onsets_sixteenths_and_eighths():
     assert np_(tl.onset).tolist() == [0, 9, 27, 36, 108]
     assert int(tl.n_frames) == 108 and int(tl.n_notes) == 4
     assert float(tl.tempo) == 100
-    nof = np_(tl.note_of_frame)
-    assert nof.shape == (108,)
-    assert (nof[:9] == 0).all() and (nof[9:27] == 1).all() and (nof[27:36] == 2).all() and (nof[36:] == 3).all()
     np.testing.assert_allclose(np_(tl.whole), [1 / 16, 1 / 8, 1 / 16, 1 / 2])
 
 
@@ -73,16 +68,71 @@ def test_triplets_cumulative_rounding():
     assert int(tl.ticks_per_whole) == 24 and np_(tl.ticks).tolist() == [3, 3, 3, 2, 2, 2, 3]
 
 
-def test_capacities():
-    tl = from_song(song_a(), note_capacity=6, frame_capacity=120)
-    assert tl.left.shape == (6, 6) and tl.onset.shape == (7,) and tl.note_of_frame.shape == (120,)
+def test_notes_longer_than_a_bar():
+    # 2, 2 and 4 whole notes at 120 BPM: a whole note is 4 beats of 0.5 s = 120 frames; the shortest note (2 whole)
+    # is 240 frames exactly, so the tempo stays 120. One tick = 1 whole note.
+    song = Song(120, [make_note(d, (0, X, X, X, X, X)) for d in (2, 2, 4)])
+    tl = from_song(song)
+    assert np_(tl.onset).tolist() == [0, 240, 480, 960] and float(tl.tempo) == 120
+    assert int(tl.ticks_per_whole) == 1 and np_(tl.ticks).tolist() == [2, 2, 4]
+    # at 100 BPM the 2 whole notes last 2 * 14400 / 100 = 288 frames: onsets 0, 288, 576, 1152
+    assert np_(from_song(Song(100, song.notes)).onset).tolist() == [0, 288, 576, 1152]
+
+
+def test_dotted_notes_keep_their_length():
+    # Dotted quarter, dotted quarter, dotted half at 120 BPM: a quarter is 0.5 s = 30 frames, so 45, 45 and 90
+    # frames and the tempo stays 120. One tick = 1/8 (3, 3 and 6 ticks).
+    song = Song(120, [make_note(d, (0, X, X, X, X, X)) for d in (F(3, 8), F(3, 8), F(3, 4))])
+    tl = from_song(song)
+    assert np_(tl.onset).tolist() == [0, 45, 90, 180] and float(tl.tempo) == 120
+    assert int(tl.ticks_per_whole) == 8 and np_(tl.ticks).tolist() == [3, 3, 6]
+
+
+def test_timing_limits():
+    quarter = make_note(F(1, 4), (0, X, X, X, X, X))
+    # tempo range 20..400: a quarter at 20 BPM is 3 s = 180 frames, at 400 BPM 0.15 s = 9 frames
+    assert int(from_song(Song(20, [quarter])).n_frames) == 180
+    assert int(from_song(Song(400, [quarter])).n_frames) == 9
+    for tempo, text in ((19.9, "19.9"), (400.5, "400.5"), (1e9, "1e+09")):
+        with pytest.raises(SongError) as info:
+            from_song(Song(tempo, [quarter]))
+        assert str(info.value) == f"<input>: tempo {text} BPM is outside 20..400 (quarter-note beats per minute)"
+    # one frame at 120 BPM is 120 / 14400 = 1/120 of a whole note: a 1/120 note is the shortest allowed (stretched to
+    # 5 frames: 5 * 120 = 600 frames per whole, tempo 24), a 1/121 note is refused
+    tl = from_song(Song(120, [make_note(F(1, 120), (0, X, X, X, X, X))]))
+    assert int(tl.n_frames) == 5 and float(tl.tempo) == 24
+    with pytest.raises(SongError, match=r"^<input>:note 1: this note \(duration 1/121\) lasts 0\.99 frames"):
+        from_song(Song(120, [quarter, make_note(F(1, 121), (0, X, X, X, X, X))]))
+    # length: 900 whole notes at 120 BPM are 900 * 120 = 108000 frames = 30 min, the most a song may last
+    assert int(from_song(Song(120, [make_note(900, (0, X, X, X, X, X))])).n_frames) == 108000
+    with pytest.raises(SongError, match=r"^<input>:note 1: this note \(duration 900\) ends at frame 108030, past"):
+        from_song(Song(120, [quarter, make_note(900, (0, X, X, X, X, X))]))
+    # 1/7, 1/11, 1/13, 1/17, 1/19, 1/23 at 60 BPM (shortest 14400 / 60 / 23 = 10.4 frames) need a tick of
+    # 1/(7 * 11 * 13 * 17 * 19 * 23) = 1/7436429 whole note: 1/23 is 323323 ticks, and 323323 * 14400 > 2**24
+    odd = Song(60, [make_note(F(1, d), (0, X, X, X, X, X)) for d in (7, 11, 13, 17, 19, 23)])
+    with pytest.raises(SongError, match=r"^<input>:note 5: durations too fine .*1/23.* tick of 1/7436429 whole"):
+        from_song(odd)
+    # a note whose ticks overflow int32 when a training window holds only it, re-timed at 30 BPM: at 45 BPM with
+    # 1/64 notes (14400 / 64 / 45 = 5 frames, no stretch) a note of 265 whole notes is 265 * 64 = 16960 ticks and
+    # 265 * 14400 / 30 = 127200 frames at 30 BPM: 16960 * 127200 = 2.157e9 >= 2**31 = 2.147e9; 264 wholes:
+    # 16896 * 126720 = 2.141e9 fits
+    sixty_fourth = make_note(F(1, 64), (0, X, X, X, X, X))
+    assert int(from_song(Song(45, [sixty_fourth, make_note(264, (0, X, X, X, X, X))])).n_frames) == 5 + 264 * 320
+    with pytest.raises(SongError, match=r"^<input>:note 1: this note \(duration 265\) is 16960 ticks of 1/64"):
+        from_song(Song(45, [sixty_fourth, make_note(265, (0, X, X, X, X, X))]))
+
+
+def test_capacity():
+    tl = from_song(song_a(), note_capacity=6)
+    assert tl.left.shape == (6, 6) and tl.onset.shape == (7,) and tl.note_capacity == 6
     assert np_(tl.onset).tolist() == [0, 9, 27, 36, 108, 108, 108]
-    assert (np_(tl.note_of_frame)[108:] == 4).all()
     assert (np_(tl.frets)[4:] == -1).all() and (np_(tl.left)[4:] == 0).all() and not np_(tl.pick)[4:].any()
+    assert not np_(tl.ticks)[4:].any() and not np_(tl.whole)[4:].any()
+    assert_same(pad(from_song(song_a()), 6), tl)                  # padding later is the same as building padded
     with pytest.raises(ValueError):
         from_song(song_a(), note_capacity=3)
     with pytest.raises(ValueError):
-        from_song(song_a(), frame_capacity=107)
+        pad(tl, 5)
 
 
 # ------------------------------------------------------------------------------------------------------ encodings
@@ -109,85 +159,14 @@ def test_left_flips_open_mute_and_fills_chord_hint():
     assert np_(tl.effects)[2].tolist() == [1, 2, 0, 0, 0, 0]
 
 
-def test_note_at_and_frames_left():
-    tl = from_song(song_a())
-    assert [int(note_at(tl, f)) for f in (0, 8, 9, 26, 27, 36, 107, 108, 500)] == [0, 0, 1, 1, 2, 3, 3, 4, 4]
-    assert [int(frames_left(tl, f)) for f in (0, 8, 9, 12, 107, 108)] == [9, 1, 18, 15, 1, 0]
-
-
-def test_left_goal_by_hand():
-    tl = from_song(song_a())
-    # frame 0: notes 0..3 and one past the end. Timers: 9 left -> 9/20-1 = -0.55; 18 -> -0.1; 9 -> -0.55;
-    # 72 -> clipped to +1; past the end -> 0 frames -> -1 with all-zero frets.
-    g = np_(left_goal(tl, 0)).reshape(5, 7)
-    np.testing.assert_allclose(g, [
-        [3 / 22, 0, -1, 0, 0, 0, -0.55],
-        [0, 5 / 22, 0, 0, 0, 0, -0.1],
-        [0, 0, 0, 7 / 22, 0, 0, -0.55],
-        [0, 0, 0, 0, 0, 0, 1.0],
-        [0, 0, 0, 0, 0, 0, -1.0],
-    ], atol=1e-6)
-    # frame 12, inside note 1 (frames 9..26): 27-12 = 15 left -> -0.25; then notes 2, 3 and two past the end
-    g = np_(left_goal(tl, 12)).reshape(5, 7)
-    np.testing.assert_allclose(g, [
-        [0, 5 / 22, 0, 0, 0, 0, -0.25],
-        [0, 0, 0, 7 / 22, 0, 0, -0.55],
-        [0, 0, 0, 0, 0, 0, 1.0],
-        [0, 0, 0, 0, 0, 0, -1.0],
-        [0, 0, 0, 0, 0, 0, -1.0],
-    ], atol=1e-6)
-    # past the end: everything padding
-    np.testing.assert_allclose(np_(left_goal(tl, 108)).reshape(5, 7)[:, 6], -1.0)
-    assert not np_(left_goal(tl, 108)).reshape(5, 7)[:, :6].any()
-
-
-def test_right_goal_with_done():
-    tl = from_song(song_a())
-    g = np_(right_goal(tl, 3)).reshape(5, 7)
-    # frame 3: 6 frames left -> 6/20-1 = -0.7; note 0 picks strings 1 and 3, note 1 string 2, note 2 is a hammer-on
-    np.testing.assert_allclose(g[:, :6], [[1, 0, 1, 0, 0, 0], [0, 1, 0, 0, 0, 0]] + [[0] * 6] * 3)
-    np.testing.assert_allclose(g[:, 6], [-0.7, -0.1, -0.55, 1.0, -1.0], atol=1e-6)
-    done = jnp.array([True, False, False, False, False, False])
-    g = np_(right_goal(tl, 3, done)).reshape(5, 7)
-    np.testing.assert_allclose(g[0, :6], [0, 0, 1, 0, 0, 0])     # string 1 already picked in this note
-    np.testing.assert_allclose(g[1, :6], [0, 1, 0, 0, 0, 0])     # later notes are not masked
-
-
-# ------------------------------------------------------------------------------------------------------ augmentation
-
-def song_3_to_7():
-    return Song(100, [
-        make_note(F(1, 8), (3, 0, X, X, X, X)),
-        make_note(F(1, 8), (X, X, X, X, 4, X), chord=(X, X, 5, 7, 4, 0)),   # chord frets 4..7, open string 6
-        make_note(F(1, 4), (7, X, X, X, X, 0)),
-    ])
-
-
-def test_shift_and_range():
-    tl = from_song(song_3_to_7())
-    lo, hi = shift_range(tl)
-    assert (int(lo), int(hi)) == (-2, 15)          # 3 - 2 = 1 and 7 + 15 = 22
-    up = shift(tl, 2)
-    assert np_(up.left).tolist() == [[5, -1, 0, 0, 0, 0], [0, 0, 7, 9, 6, -1], [9, 0, 0, 0, 0, -1]]
-    assert np_(up.frets).tolist() == [[5, 0, X, X, X, X], [X, X, X, X, 6, X], [9, X, X, X, X, 0]]
-    assert (np_(up.pick) == np_(tl.pick)).all()
-    assert tuple(int(v) for v in shift_range(up)) == (-4, 13)
-    top = shift(tl, 15)
-    assert int(np_(top.left).max()) == 22 and tuple(int(v) for v in shift_range(top)) == (-17, 0)
-    open_only = from_song(Song(100, [make_note(F(1, 4), (0, X, X, X, X, X))]))
-    assert tuple(int(v) for v in shift_range(open_only)) == (0, 0)
-
-
-def test_random_shift_stays_on_the_neck():
-    tl = from_song(song_3_to_7())
-    f = jax.jit(random_shift)
-    seen = set()
-    for k in jax.random.split(jax.random.PRNGKey(0), 40):
-        s = f(k, tl)
-        pressed = np_(s.left)[np_(s.left) > 0]
-        assert pressed.min() >= 1 and pressed.max() <= 22
-        seen.add(int(np_(s.left)[0, 0]) - 3)
-    assert len(seen) > 5 and all(-2 <= o <= 15 for o in seen)
+def test_goal_codes():
+    # frets: k/22, open -1, don't care 0; timers: clip(frames / 20, 0, 2) - 1
+    np.testing.assert_allclose(np_(fret_code([5, 22, -1, 0])), [5 / 22, 1, -1, 0])
+    np.testing.assert_allclose(np_(timer_code([0, 10, 20, 40, 100])), [-1, -0.5, 0, 1, 1])
+    values = np.arange(30, dtype=np.float32).reshape(5, 6)
+    g = np_(goal_vector(values, np.array([True, True, False, True, False]), np.full(5, 0.5))).reshape(5, 7)
+    np.testing.assert_array_equal(g[:, :6], values * np.array([1, 1, 0, 1, 0])[:, None])   # invalid notes: zeros
+    np.testing.assert_array_equal(g[:, 6], 0.5)                                             # timers kept
 
 
 def assert_same(a, b):
@@ -195,82 +174,35 @@ def assert_same(a, b):
         np.testing.assert_array_equal(np_(x), np_(y), err_msg=jax.tree_util.keystr(path))
 
 
-def test_retime_faster_equals_from_song():
-    tl = from_song(song_a())
-    # 120 BPM: 1/16 = 900/120 = 7.5 -> 8 (half-to-even) -> 128 per whole, 112.5 BPM effective;
-    # onsets 0, 8, 24, 32 and end 12/16 * 128 = 96
-    fast = retime(tl, 120.0)
-    assert np_(fast.onset).tolist() == [0, 8, 24, 32, 96]
-    assert int(fast.n_frames) == 96 and float(fast.tempo) == 112.5
-    assert (np_(fast.note_of_frame)[96:] == 4).all() and np_(fast.note_of_frame)[24] == 2
-    assert_same(fast, from_song(song_a(120), frame_capacity=108))
-    # 150 BPM: 900/150 = 6 frames -> 96 per whole -> onsets 0, 6, 18, 24, end 72
-    assert np_(retime(tl, 150).onset).tolist() == [0, 6, 18, 24, 72]
-    assert_same(jax.jit(retime)(tl, jnp.float32(150)), from_song(song_a(150), frame_capacity=108))
-    # triplets at 105 through retime from 100 BPM give the hand-worked onsets above
-    e, t = F(1, 8), F(1, 12)
-    trip = Song(100, [make_note(d, (0, X, X, X, X, X)) for d in (e, e, e, t, t, t, e)])
-    assert np_(jax.jit(retime)(from_song(trip, frame_capacity=200), 105).onset).tolist() == \
-        [0, 16, 33, 50, 60, 72, 82, 99]
+# ------------------------------------------------------------------------------------------------------ batching
+
+def song_3_to_7():
+    """1/8, 1/8, 1/4 at 100 BPM: 1/8 = 1800/100 = 18 frames, so onsets 0, 18, 36, 72."""
+    return Song(100, [
+        make_note(F(1, 8), (3, 0, X, X, X, X)),
+        make_note(F(1, 8), (X, X, X, X, 4, X), chord=(X, X, 5, 7, 4, 0)),
+        make_note(F(1, 4), (7, X, X, X, X, 0)),
+    ])
 
 
-def test_retime_slower_truncates_and_recovers():
-    song = Song(100, list(song_a().notes) + [make_note(F(1, 16), (0, X, X, X, X, X))])
-    tl = from_song(song)                       # onsets 0, 9, 27, 36, 108, 117
-    assert tl.frame_capacity == 117
-    # 60 BPM: 900/60 = 15 frames -> onsets 0, 15, 45, 60, 180, 195: note 4 starts past T = 117 and is dropped,
-    # note 3 is cut at frame 117
-    slow = retime(tl, 60)
-    assert int(slow.n_notes) == 4 and int(slow.n_frames) == 117
-    assert np_(slow.onset).tolist() == [0, 15, 45, 60, 117, 117]
-    assert int(note_at(slow, 116)) == 3 and int(note_at(slow, 117)) == 4
-    assert np_(left_goal(slow, 60)).reshape(5, 7)[1, 6] == -1.0   # dropped note reads as padding
-    assert_same(retime(slow, 100), tl)
+def test_stack():
+    a, b = from_song(song_a()), from_song(song_3_to_7())            # 4 notes, 108 frames; 3 notes, 72 frames
+    both = stack([a, b])
+    assert both.left.shape == (2, 4, 6) and both.onset.shape == (2, 5) and both.n_notes.shape == (2,)
+    assert np_(both.onset[1]).tolist() == [0, 18, 36, 72, 72]
+    assert np_(both.frets[1, 3]).tolist() == [-1] * 6 and np_(both.whole[1, 3]) == 0 and np_(both.ticks[1, 3]) == 0
+    assert np_(both.n_notes).tolist() == [4, 3] and np_(both.n_frames).tolist() == [108, 72]
+    assert_same(jax.tree.map(lambda x: x[0], both), a)
 
 
-def test_random_tempo():
-    tl = from_song(song_a(), frame_capacity=300)
-    f = jax.jit(random_tempo)
-    tempos = {float(f(k, tl).base_tempo) for k in jax.random.split(jax.random.PRNGKey(1), 30)}
-    assert all(80 <= t <= 120 and t == int(t) for t in tempos) and len(tempos) > 5
-    slow = from_song(Song(35, song_a().notes), frame_capacity=1000)
-    assert min(float(f(k, slow).base_tempo) for k in jax.random.split(jax.random.PRNGKey(2), 30)) >= 30
-
-
-# ------------------------------------------------------------------------------------------------------ batching, jit
-
-def test_stack_and_vmap():
-    a = from_song(song_a())                                    # 4 notes, 108 frames
-    b = from_song(song_3_to_7())                               # 1/8 = 18 frames: onsets 0, 18, 36, 72
-    assert np_(b.onset).tolist() == [0, 18, 36, 72]
-    batch = stack([a, b])
-    assert batch.left.shape == (2, 4, 6) and batch.note_of_frame.shape == (2, 108) and batch.n_notes.shape == (2,)
-    assert np_(batch.onset[1]).tolist() == [0, 18, 36, 72, 72]
-    assert np_(batch.frets[1, 3]).tolist() == [-1] * 6 and np_(batch.whole[1, 3]) == 0
-    assert (np_(batch.note_of_frame[1, 72:]) == 3).all()
-    frames = jnp.array([12, 40])
-    got = jax.jit(jax.vmap(left_goal))(batch, frames)
-    np.testing.assert_allclose(np_(got[0]), np_(left_goal(a, 12)))
-    np.testing.assert_allclose(np_(got[1]), np_(left_goal(b, 40)))
-    done = jnp.zeros((2, 6), bool).at[1, 0].set(True)
-    r = jax.vmap(right_goal)(batch, frames, done)
-    np.testing.assert_allclose(np_(r[1]), np_(right_goal(b, 40, done[1])))
-    # per-song augmentation inside vmap
-    fast = jax.vmap(retime)(batch, jnp.array([150.0, 120.0]))
-    assert np_(fast.onset[0]).tolist() == [0, 6, 18, 24, 72]
-    assert np_(fast.onset[1]).tolist()[:4] == [0, 15, 30, 60]    # 1/8 at 120 BPM = 15 frames
-    lo, hi = jax.vmap(shift_range)(batch)
-    assert np_(lo).tolist() == [-2, -2] and np_(hi).tolist() == [15, 15]
-
-
-def test_jit_with_traced_inputs():
-    tl = from_song(song_a())
-    lg = jax.jit(left_goal)
-    for f in (0, 12, 50, 108):
-        np.testing.assert_allclose(np_(lg(tl, jnp.int32(f))), np_(left_goal(tl, f)))
-    rg = jax.jit(right_goal)
-    np.testing.assert_allclose(np_(rg(tl, jnp.int32(3), jnp.ones(6, bool))).reshape(5, 7)[0, :6], 0)
-    sh = jax.jit(shift)(tl, jnp.int32(4))
-    assert np_(sh.left)[0, 0] == 7 and np_(sh.left)[0, 2] == -1
-    assert_same(jax.jit(retime)(tl, jnp.float32(120)), retime(tl, 120.0))
-    assert jax.jit(frames_left)(tl, jnp.int32(12)) == 15 and jax.jit(note_at)(tl, jnp.int32(12)) == 1
+def test_batch_has_fixed_capacities():
+    a, b = from_song(song_a()), from_song(song_3_to_7())
+    assert [tlm.capacity(n, 1) for n in (1, 2, 3, 5, 8)] == [1, 2, 4, 8, 8] and tlm.capacity(3, 256) == 256
+    full = batch([a, b, a])                                       # 3 songs -> 4, 4 notes -> at least 256
+    assert full.left.shape == (4, 256, 6) and full.onset.shape == (4, 257)
+    assert np_(full.n_notes).tolist() == [4, 3, 4, 0]             # the fourth song is empty
+    assert int(full.ticks_per_whole[3]) == 1 and not np_(full.ticks[3]).any()
+    small = batch([a, b], songs=2, notes=8)
+    assert small.left.shape == (2, 8, 6) and np_(small.onset[0]).tolist() == [0, 9, 27, 36] + [108] * 5
+    with pytest.raises(ValueError):
+        batch([a, b, a], songs=2)

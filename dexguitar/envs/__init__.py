@@ -1,23 +1,29 @@
 """Pure-functional MJX envs: `env.reset(key) -> State`, `env.step(State, action) -> State` (jit + vmap)."""
-from dexguitar.envs.core import EnvConfig, GuitarEnv, State, Window
+import dataclasses
+
+from dexguitar.envs.core import Body, EnvConfig, GuitarEnv, Picking, State, Task
 from dexguitar.envs.duet import DuetEnv
+from dexguitar.envs.layout import ObsLayout
 from dexguitar.envs.left import LeftEnv
 from dexguitar.envs.right import RightEnv
+from dexguitar.envs.wrappers import AutoReset, ChainWindows, PlayThrough, Wrapper
+from dexguitar.music import timeline as TL
 
 ENVS = {"left": LeftEnv, "right": RightEnv, "duet": DuetEnv}
 
 
-def make(hand: str, songs, config: EnvConfig | None = None, **overrides) -> GuitarEnv:
-    """The env for `hand` ("left", "right" or "duet") over a song batch (a `Timeline` or a list of them)."""
-    import dataclasses
-
-    from dexguitar.music import timeline as TL
+def make(hand: str, songs, config: EnvConfig | None = None, backend: str = "jax", **overrides):
+    """The env for `hand` ("left", "right" or "duet") over a song batch (a `Timeline` or a list of them or of
+    `Song`s), with its episode logic: training windows chained and auto-reset, or (`config.sequential`) whole songs
+    played through."""
     if hand not in ENVS:
         raise ValueError(f"unknown hand {hand!r}; expected one of {', '.join(ENVS)}")
     if isinstance(songs, (list, tuple)):
         songs = TL.stack([s if isinstance(s, TL.Timeline) else TL.from_song(s) for s in songs])
-    config = config or EnvConfig(episode_frames=1200 if hand == "duet" else 600)
-    return ENVS[hand](songs, dataclasses.replace(config, **overrides))
+    config = dataclasses.replace(config or EnvConfig(episode_frames=1200 if hand == "duet" else 600), **overrides)
+    env = ENVS[hand](songs, config, backend)
+    return PlayThrough(env) if config.sequential else AutoReset(ChainWindows(env))
 
 
-__all__ = ["EnvConfig", "GuitarEnv", "State", "Window", "LeftEnv", "RightEnv", "DuetEnv", "ENVS", "make"]
+__all__ = ["EnvConfig", "GuitarEnv", "State", "Body", "Picking", "Task", "ObsLayout", "LeftEnv", "RightEnv",
+           "DuetEnv", "ENVS", "make", "Wrapper", "ChainWindows", "AutoReset", "PlayThrough"]

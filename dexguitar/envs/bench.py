@@ -5,35 +5,37 @@ from __future__ import annotations
 import time
 
 import jax
-from dexguitar import mjx as _quiet_mjx
+import jax.numpy as jnp
+import mujoco
+import numpy as np
 
+from dexguitar import envs
+from dexguitar import mjx as _quiet_mjx
+from dexguitar.music import library, procedural
+from dexguitar.music import timeline as TL
 from dexguitar.world import scene as S
+from dexguitar.world.physics import control_step
 
 mjx = _quiet_mjx()
 
 
 def default_songs(hand: str):
     """The embedded songs (left, duet) or procedural picking patterns (right)."""
-    from dexguitar.music import library, procedural
-    from dexguitar.music import timeline as TL
     songs = procedural.right_patterns(0, 16) if hand == "right" else [library.load(n) for n in library.names()]
     return [TL.from_song(s) for s in songs]
 
 
 def bench_env(hand: str, n_envs: int, steps: int, *, bare: bool = False, noise: float = 0.05, seed: int = 0,
               backend: str = "jax") -> dict:
-    from dexguitar import envs
-    env = envs.make(hand, default_songs(hand), backend=backend) if backend != "jax" else envs.make(
-        hand, default_songs(hand))
+    env = envs.make(hand, default_songs(hand), backend=backend)
     keys = jax.random.split(jax.random.PRNGKey(seed), n_envs)
 
     if bare:
-        data0 = jax.vmap(env.reset)(keys).data
+        data0 = jax.vmap(env.reset)(keys).body.data
 
         def one(data, key):
-            ctrl = env.action_to_ctrl(noise * jax.random.normal(key, (env.action_size,)))
-            data = data.replace(ctrl=ctrl)
-            return jax.lax.fori_loop(0, S.SUBSTEPS, lambda _, d: mjx.step(env.mjx_model, d), data)
+            return control_step(env.mjx_model, data, env.action_to_ctrl(noise * jax.random.normal(
+                key, (env.action_size,))))
 
         def body(carry, _):
             data, key = carry
@@ -62,3 +64,32 @@ def bench_env(hand: str, n_envs: int, steps: int, *, bare: bool = False, noise: 
     return {"hand": hand, "envs": n_envs, "steps": steps, "bare": bare, "compile_s": compile_s, "run_s": run_s,
             "control_steps_per_s": rate, "physics_steps_per_s": rate * S.SUBSTEPS,
             "device": jax.devices()[0].device_kind, "backend": jax.default_backend()}
+
+
+def check_scenes(n_envs: int = 4, steps: int = 60, mirrored: bool = False) -> list[dict]:
+    """Every scene (and with `mirrored` its left-handed twin) held at its home pose for `steps` control steps by
+    n_envs vmapped MJX copies: compile time, speed, and whether the state stayed finite."""
+    rows = []
+    for name in S.SCENES:
+        for mirror in ((False, True) if mirrored else (False,)):
+            m = S.build_model(name, mirror=mirror)
+            mx = mjx.put_model(m)
+            d = mujoco.MjData(m)
+            mujoco.mj_resetDataKeyframe(m, d, 0)
+            batch = jax.tree.map(lambda x: jnp.stack([x] * n_envs), mjx.put_data(m, d))
+            ctrl = jnp.asarray(m.key_qpos[0], jnp.float32)
+
+            def rollout(data):
+                step = jax.vmap(lambda x: control_step(mx, x, ctrl))
+                return jax.lax.scan(lambda x, _: (step(x), None), data, None, length=steps)[0]
+            run = jax.jit(rollout)
+            t0 = time.perf_counter()
+            out = jax.block_until_ready(run(batch))
+            compile_s = time.perf_counter() - t0
+            t0 = time.perf_counter()
+            out = jax.block_until_ready(run(out))
+            run_s = time.perf_counter() - t0
+            rows.append({"scene": name + (" (mirrored)" if mirror else ""), "dof": m.nq, "compile_s": compile_s,
+                         "control_steps_per_s": n_envs * steps / run_s,
+                         "finite": bool(np.all(np.isfinite(np.asarray(out.qpos))))})
+    return rows

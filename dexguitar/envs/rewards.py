@@ -8,9 +8,11 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from dexguitar.world import detect
-from dexguitar.world.guitar import GUITAR, Guitar
+from dexguitar.world.geometry import point_segment_distance
+from dexguitar.world.guitar import GUITAR, N_STRINGS, Guitar
+from dexguitar.world.hands import FINGERS
 
-N_STRINGS, N_FINGERS = 6, 4
+N_FINGERS = len(FINGERS)
 SIN_5_DEG = 0.0871557         # lie-flat test: a proximal or middle part may press if it is within 5 deg of the board
 OPEN_DISTANCE = 0.007         # Eq. 5 normalization (finger radius ~6 mm)
 PICK_CLEARANCE = 0.003        # Eq. 13: the pick rests at least 3 mm from every string
@@ -59,7 +61,7 @@ def left_reward(segments, goal, press, energy, guitar: Guitar = GUITAR):
     press: int (6,) detected frets; energy: Eq. 8 value in [0, 1].
     """
     targets = jnp.asarray(guitar.target_points, jnp.float32)[jnp.arange(N_STRINGS), jnp.clip(goal, 0, None)]
-    d2, _ = detect.point_segment_distance(targets[:, None, :], segments[None, :, 0], segments[None, :, 1])  # (6, 12)
+    d2, _ = point_segment_distance(targets[:, None, :], segments[None, :, 0], segments[None, :, 1])  # (6, 12)
     usable = finger_order(goal)[:, jnp.arange(12) // 3] & lie_flat(segments)[None, :]
     d2 = jnp.min(jnp.where(usable, d2, jnp.inf), axis=1)
     r_press = 0.8 * jnp.exp(-1000.0 * d2) + 0.2 * jnp.exp(-30.0 * d2)                  # Eq. 4
@@ -89,28 +91,33 @@ def r_distance(d):
 def pick_distances(pick, guitar: Guitar = GUITAR):
     """(6,) distance from the pick point to every string."""
     s = jnp.asarray(guitar.strings, jnp.float32)
-    d2, _ = detect.point_segment_distance(pick[None, :], s[:, 0], s[:, 1])
+    d2, _ = point_segment_distance(pick[None, :], s[:, 0], s[:, 1])
     return jnp.sqrt(d2)
 
 
 def pick_update(p_prev, p_now, targets, done, ok, ready, depth, guitar: Guitar = GUITAR):
     """Picking bookkeeping of one control step (Sec. 5.2).
 
-    targets: strings to pick in this note; done: already picked (or skipped); ok: no error so far in the note;
-    ready: duet gate (all True for the right hand alone). A string is tackled wrongly when it is picked but was not
-    a ready target still to pick (a non-target, a repeat, or too shallow: `depth` below the string, training only),
-    or when it is a remaining target that the pick swept past while picking others (consistent order).
-    Returns picked, wrong, done, ok.
+    targets: strings to pick in this note; done: already picked (or skipped); ok: no error so far in the note (for
+    the reward); ready: duet gate (all True for the right hand alone). A string is tackled wrongly when it is picked
+    but was not a target still to pick (a non-target, a repeat, or too shallow: `depth` below the string, training
+    only), or when it is a remaining target that the pick swept past while picking others (consistent order).
+    A target picked before the left hand holds it (`ready` False) is `early`: wrong for the duet's cooperative
+    reward, but not a picking error of the right hand: the paper's right-hand F1 judges the picking alone and
+    both-hands F1 judges the timing (`scoring.close`).
+    Returns picked, wrong, early, done, ok.
     """
     crossed = detect.pick_crossings(p_prev, p_now, guitar, 0.0).picked
     valid = detect.pick_crossings(p_prev, p_now, guitar, depth).picked
-    correct = valid & targets & ~done & ready
+    correct = valid & targets & ~done
     wrong = crossed & ~correct
+    early = correct & ~ready
     sweep = jnp.sign((p_now[0] - p_prev[0]) * guitar.sign)                 # +1 toward string 1 (down)
     x_at = guitar.sign * jnp.asarray(_string_x(guitar, p_now[1]))
     behind = (x_at - guitar.sign * p_now[0]) * sweep < 0                    # the pick has moved past the string
     skipped = targets & ~done & ~crossed & behind & jnp.any(crossed) & (sweep != 0)
-    return crossed, wrong | skipped, done | correct | skipped | (crossed & targets), ok & ~wrong & ~skipped
+    bad = wrong | skipped | early
+    return crossed, wrong | skipped, early, done | correct | skipped | (crossed & targets), ok & ~bad
 
 
 def _string_x(guitar: Guitar, y):
@@ -120,7 +127,7 @@ def _string_x(guitar: Guitar, y):
 
 
 def pick_reward(picked, wrong, targets, done, ok, ready, distances):
-    """r_pick of Eq. 10 given the state after this step's `pick_update`."""
+    """r_pick of Eq. 10 given the state after this step's `pick_update` (`wrong` includes early picks)."""
     r_plus = jnp.where(jnp.any(wrong), jnp.min(jnp.where(wrong, r_distance(distances), 1.0)), 1.0)   # Eq. 11
     remaining = targets & ~done & ready
     idx = jnp.arange(N_STRINGS)
@@ -140,3 +147,28 @@ def pick_energy(v_pick, a_pick):
     """Eq. 16: exp(-20 |v|^2) - 14 |0.05 a|^4. The acceleration term is capped at 1 (as in the authors' code):
     unbounded it reaches -400 for a 100 m/s^2 flick and swamps every other reward (needed to learn)."""
     return jnp.exp(-20.0 * jnp.sum(v_pick ** 2)) - 14.0 * jnp.minimum(jnp.sum((0.05 * a_pick) ** 2) ** 2, 1.0)
+
+
+def right_reward(r_pick, contact, hand_energy_, pick_energy_):
+    """Eq. 15: r_pick + 0.05 r_contact + 0.05 (r_energy + r_pick_energy)."""
+    return r_pick + 0.05 * contact + 0.05 * (hand_energy_ + pick_energy_)
+
+
+# ----------------------------------------------------------------------------------------------- termination
+
+def left_failed(wrist, segments, thumb_tip, guitar: Guitar = GUITAR):
+    """Reference §3.7: the wrist outside its box, a finger wrapped far behind the neck, a fingertip sunk into the
+    neck, or the thumb over the treble side of the neck (guitar frame)."""
+    x = wrist[0] * guitar.sign
+    out_of_box = (x < -0.1) | (x > 0.3) | (wrist[1] < -0.3) | (wrist[1] > 0.3) | (wrist[2] < -0.2) | (wrist[2] > 0.05)
+    deep = jnp.any(segments[..., 2] < -0.07)
+    tips = segments[2::3, 1]
+    sunk = jnp.any((jnp.abs(tips[:, 0]) < 0.024) & (tips[:, 2] < guitar.fretboard_z - 0.003) & (tips[:, 2] > -0.008))
+    return out_of_box | deep | sunk | (thumb_tip[0] * guitar.sign > 0.07)
+
+
+def right_failed(points, guitar: Guitar = GUITAR):
+    """Reference §3.7: any link or fingertip of the picking hand outside its box (guitar frame)."""
+    x = points[:, 0] * guitar.sign
+    return jnp.any((x < -0.3) | (x > 0.3) | (points[:, 1] < -0.6) | (points[:, 1] > 0.0)
+                   | (points[:, 2] < -0.1) | (points[:, 2] > 0.3))

@@ -1,4 +1,5 @@
-"""Per-note precision, recall and F1 exactly as the paper defines them (Sec. 6.1), as streaming tallies.
+"""Scoring the notes: per-note precision, recall and F1 exactly as the paper defines them (Sec. 6.1), as streaming
+tallies that the env keeps while it plays.
 
 A note is judged string by string. True positives:
 - left hand: a target string (goal fret k > 0) pressed at fret k *continuously* for at least 2/3 of the note;
@@ -17,7 +18,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 from flax import struct
 
-N_STRINGS = 6
+from dexguitar.world.guitar import N_STRINGS
 
 
 @struct.dataclass

@@ -6,18 +6,37 @@ to the wrist), so the fingers are free of the wrist's pose; the right hand has o
 keeps the left hand's two (the left hand is the first of the duet's hands)."""
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import jax
 import jax.numpy as jnp
 
-from dexguitar.envs.core import positive_w, quat_conj, quat_mul, quat_to_mat
+from dexguitar.world.geometry import positive_w, quat_conj, quat_mul, quat_to_mat
 
-# name -> (link indices into hands.KEY_LINKS, parent): "guitar" = as observed, "wrist" = relative to the wrist
-DISCRIMINATORS = {
-    "left": {"wrist": (tuple(range(4)), "guitar"), "fingers": (tuple(range(4, 16)), "wrist")},
-    "right": {"hand": (tuple(range(16)), "guitar")},
-}
-DISCRIMINATORS["duet"] = DISCRIMINATORS["left"]    # synchronization keeps only the left hand's (Sec. 5.3)
 FRAMES = 3
+LINK_POSE = 7                  # position 3 + quaternion 4 per link
+
+
+class Disc(NamedTuple):
+    """One discriminator: which key links it sees (indices into hands.KEY_LINKS), relative to what ("guitar": as
+    observed; "wrist": in the wrist's frame), and the PPO weight of its reward column (Eq. 9)."""
+
+    links: tuple[int, ...]
+    parent: str
+    weight: float
+
+    @property
+    def features(self) -> int:
+        return len(self.links) * LINK_POSE
+
+
+# Reference §8: left 0.05 per discriminator, right 0.5; synchronization keeps only the left hand's two, with the
+# authors' two-hand weight 0.025 doubled like the others (Sec. 5.3).
+DISCRIMINATORS = {
+    "left": {"wrist": Disc(tuple(range(4)), "guitar", 0.05), "fingers": Disc(tuple(range(4, 16)), "wrist", 0.05)},
+    "right": {"hand": Disc(tuple(range(16)), "guitar", 0.5)},
+    "duet": {"wrist": Disc(tuple(range(4)), "guitar", 0.05), "fingers": Disc(tuple(range(4, 16)), "wrist", 0.05)},
+}
 
 
 def features(link_hist, links, parent):
@@ -45,9 +64,9 @@ def hinge_loss(apply, params, real, fake, key, gp_weight: float = 10.0):
                                    "d_fake": jnp.mean(d_fake)}
 
 
-def sample_reference(key, frames, n: int):
-    """n windows of FRAMES consecutive control frames from reference link poses (T, 16, 7)."""
-    start = jax.random.randint(key, (n,), 0, frames.shape[0] - FRAMES + 1)
+def sample_reference(key, frames, length, n: int):
+    """n windows of FRAMES consecutive control frames from the first `length` reference link poses (T, 16, 7)."""
+    start = jax.random.randint(key, (n,), 0, jnp.maximum(length - FRAMES + 1, 1))
     return frames[start[:, None] + jnp.arange(FRAMES)[None, :]]
 
 

@@ -1,9 +1,20 @@
-"""The host side of training: build a trainer from a config, resume, run scanned chunks, show progress, write
-metrics and checkpoints. The host only logs and saves; all learning happens inside the jitted chunk."""
+"""The host side of training: a run directory, resume, scanned chunks, progress, metrics and checkpoints. The host
+only logs and saves; all learning happens inside the jitted chunk.
+
+A run directory holds `config.json` (how the run was made: compared on --resume), `ckpt/` (the last few whole train
+states), `metrics.jsonl` (one row per host call, written after its checkpoint, so a kill never leaves a row without
+one) and `policy/` (the export). A lock file keeps a second process out of a directory in use. Non-finite parameters
+are never saved: the run rolls back to its last good checkpoint with a new random key and stops after repeated
+failures.
+"""
 from __future__ import annotations
 
 import dataclasses
+import fcntl
+import hashlib
 import json
+import os
+import runpy
 import sys
 import time
 from pathlib import Path
@@ -11,15 +22,30 @@ from pathlib import Path
 import jax
 import numpy as np
 
+from dexguitar.errors import RunError, TrainingDiverged, UserError
 from dexguitar.learn import checkpoint as C
+from dexguitar.learn import policy as PO
+from dexguitar.learn.devices import Placement
 from dexguitar.learn.trainer import Trainer, TrainConfig
 
-SUMMED = ("episodes", "terminations")      # counts (and notes/*); f1/* are sums over notes; the rest are means
+SUMMED = ("episodes", "terminations")      # counts (and notes/*, nonfinite/*); f1/* are sums over notes
+STOP_CALLS = 3                             # host calls a training F1 must hold for `stop_f1`
+MAX_ROLLBACKS = 3                          # non-finite states in a row before giving up
+RESUME_FREE = ("iterations", "iterations_per_call")   # may change on --resume; nothing else may
+
+
+def compilation_cache(directory=None) -> Path:
+    """Turn on JAX's persistent compilation cache (`$DEXGUITAR_CACHE`, default ~/.cache/dexguitar/xla), so a
+    second process loads the programs the first one compiled."""
+    directory = Path(directory or os.environ.get("DEXGUITAR_CACHE") or Path.home() / ".cache" / "dexguitar" / "xla")
+    jax.config.update("jax_compilation_cache_dir", str(directory))
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 1.0)
+    return directory
 
 
 def chunk_summary(metrics: dict, n_iter: int) -> dict:
     m = {k: float(v) for k, v in metrics.items()}
-    out = {k: m[k] for k in m if k in SUMMED or k.startswith("notes/")}
+    out = {k: m[k] for k in m if k in SUMMED or k.startswith(("notes/", "nonfinite/"))}
     for k, v in m.items():
         if k.startswith("f1/"):
             notes = m.get("notes/" + k[3:], 0.0)
@@ -29,114 +55,260 @@ def chunk_summary(metrics: dict, n_iter: int) -> dict:
     return out
 
 
-def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, progress: bool = True,
-          meta: dict | None = None, stop_after_calls: int | None = None, max_minutes: float | None = None,
-          init_from=None) -> dict:
-    """Run until `iterations` iterations are done (counting those of a resumed run). Returns the last summary."""
-    cfg = trainer.config
-    out = Path(out_dir)
-    ckpt_dir = out / "ckpt"
-    state = trainer.init()
-    if init_from and C.latest_step(ckpt_dir) is None:
-        params, meta_init = C.load_policy(C.export_dir(init_from))
-        if meta_init["hand"] != cfg.hand:
-            raise SystemExit(f"--init-from {init_from}: a {meta_init['hand']} hand policy, not {cfg.hand}")
-        state = state.replace(params=dict(state.params, policy=params["policy"]), obs_norm=params["obs_norm"])
-        print(f"policy initialized from {init_from} ({meta_init.get('samples', 0):,} samples)", file=sys.stderr)
-    if C.latest_step(ckpt_dir) is not None:
-        if not resume:
-            raise SystemExit(f"{out} already holds a run: pass --resume to continue it, or choose another --out")
-        state = C.restore(ckpt_dir, state)
-        print(f"resumed {out} at iteration {int(state.iteration)}", file=sys.stderr)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "config.json").write_text(json.dumps({"train": dataclasses.asdict(cfg),
-                                                 "env": dataclasses.asdict(trainer.env.config),
-                                                 "columns": trainer.columns, **(meta or {})}, indent=2))
-    n = cfg.iterations_per_call
-    chunk = trainer.make_train_chunk(n)
-    start_iter = int(state.iteration)
-    bar = None
-    if progress:
-        from tqdm import tqdm
-        bar = tqdm(total=iterations, initial=start_iter, unit="it", dynamic_ncols=True, file=sys.stderr)
-    summary, calls, t_start = {}, 0, time.perf_counter()
-    samples_done = 0
-    with open(out / "metrics.jsonl", "a") as log:
-        while int(state.iteration) < iterations:
-            t0 = time.perf_counter()
-            state, metrics = chunk(state)
-            metrics = jax.device_get(metrics)
-            dt = time.perf_counter() - t0
-            it = int(state.iteration)
-            summary = chunk_summary(metrics, n)
-            summary.update(iteration=it, samples=it * cfg.batch, seconds=dt, samples_per_s=n * cfg.batch / dt,
-                           wall=time.perf_counter() - t_start)
-            log.write(json.dumps(summary) + "\n")
-            log.flush()
-            C.save(ckpt_dir, it, state)
-            export(trainer, state, out / "policy")
-            calls += 1
-            samples_done += n * cfg.batch
-            if bar is not None:
-                hands = trainer.env.roles + (("both",) if len(trainer.env.roles) == 2 else ())
-                reward = np.mean([v for k, v in summary.items() if k.startswith("reward/")])
-                bar.set_postfix({"samples/s": f"{summary['samples_per_s']:,.0f}",
-                                 **{f"F1 {h}": f"{summary.get('f1/' + h, float('nan')):.3f}" for h in hands},
-                                 "reward": f"{reward:.3f}"})
-                bar.update(n)
-            if stop_after_calls is not None and calls >= stop_after_calls:
-                break
-            if max_minutes is not None and time.perf_counter() - t_start > 60 * max_minutes:
-                print(f"stopping after {max_minutes} minutes at iteration {it} (resume with --resume)",
-                      file=sys.stderr)
-                break
-    if bar is not None:
-        bar.close()
-    return summary
+def songs_digest(songs) -> str:
+    """A fingerprint of the songs a run trains on (their padded arrays)."""
+    h = hashlib.sha1()
+    for leaf in jax.tree.leaves(songs):
+        h.update(np.asarray(leaf).tobytes())
+    return h.hexdigest()[:16]
 
 
-def load_config(path: str | None, **overrides):
-    """(TrainConfig, EnvConfig or None) from an experiments/*.py file defining CONFIG (and optionally ENV), with
-    TrainConfig fields overridden by name."""
-    cfg, env = TrainConfig(), None
-    if path:
-        import runpy
-        ns = runpy.run_path(path)
-        cfg, env = ns.get("CONFIG", cfg), ns.get("ENV")
-    fields = {f.name for f in dataclasses.fields(TrainConfig)}
-    cfg = dataclasses.replace(cfg, **{k: v for k, v in overrides.items() if k in fields and v is not None})
-    return cfg, env
+def check_out(path, resume: bool) -> None:
+    """The cheap checks of a run directory, before anything is built: --out names no file, --resume finds a run,
+    and a new run does not write over an old one."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise RunError(f"--out {path}: a file, not a directory")
+    if resume and not (path / "config.json").exists():
+        raise RunError(f"{path}: no run to resume here (no config.json); leave out --resume to start one")
+    if not resume and C.latest_step(path / "ckpt") is not None:
+        raise RunError(f"{path} already holds a run: pass --resume to continue it, or choose another --out")
 
+
+class RunDir:
+    """A run directory held by this process (a lock file; released when the process ends, even by kill -9).
+    Processes other than the first of a multi-host run only read it."""
+
+    def __init__(self, path, main: bool = True):
+        self.path = Path(path)
+        self._lock = None
+        if not main:
+            return
+        if self.path.exists() and not self.path.is_dir():
+            raise RunError(f"--out {self.path}: a file, not a directory")
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise RunError(f"--out {self.path}: cannot create it ({err.strerror})") from None
+        self._lock = open(self.path / ".lock", "a+")
+        try:
+            fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            self._lock.seek(0)
+            holder = self._lock.read().strip() or "another process"
+            self._lock.close()
+            raise RunError(f"{self.path} is in use by {holder}: wait for it, or choose another --out") from None
+        self._lock.seek(0)
+        self._lock.truncate()
+        self._lock.write(f"process {os.getpid()}")
+        self._lock.flush()
+
+    ckpt = property(lambda self: self.path / "ckpt")
+    metrics = property(lambda self: self.path / "metrics.jsonl")
+    config = property(lambda self: self.path / "config.json")
+
+    def check_resume(self, record: dict) -> None:
+        """Refuse to resume a run made with another config, hand, songs or policies, naming what differs."""
+        if not self.config.exists():
+            raise RunError(f"{self.path}: no run to resume here (no config.json); leave out --resume to start one")
+        old = json.loads(self.config.read_text())
+        diffs = []
+        for key in sorted(set(old) | set(record)):
+            a, b = old.get(key), record.get(key)
+            if key == "train":
+                a = {k: v for k, v in (a or {}).items() if k not in RESUME_FREE}
+                b = {k: v for k, v in (b or {}).items() if k not in RESUME_FREE}
+                diffs += [f"train.{k}: {a.get(k)!r} -> {b.get(k)!r}" for k in sorted(set(a) | set(b))
+                          if a.get(k) != b.get(k)]
+            elif key == "env" and a != b:
+                diffs += [f"env.{k}: {a.get(k)!r} -> {b.get(k)!r}" for k in sorted(set(a or {}) | set(b or {}))
+                          if (a or {}).get(k) != (b or {}).get(k)]
+            elif key not in ("env", "train") and a != b:
+                diffs.append(f"{key}: {json.dumps(a)[:80]} -> {json.dumps(b)[:80]}")
+        if diffs:
+            raise RunError(f"{self.path} was made with another setup; --resume continues a run as it was made. "
+                           f"Differences: " + "; ".join(diffs))
+
+    def truncate_metrics(self, iteration: int) -> None:
+        """Drop metric rows past `iteration` (written by a process killed before its next checkpoint)."""
+        if not self.metrics.exists():
+            return
+        rows = [r for r in self.metrics.read_text().splitlines() if r.strip()]
+        keep = []
+        for r in rows:
+            try:
+                if json.loads(r).get("iteration", 0) <= iteration:
+                    keep.append(r)
+            except json.JSONDecodeError:        # a row cut by a kill
+                pass
+        if len(keep) != len(rows):
+            self.metrics.write_text("".join(k + "\n" for k in keep))
+
+    def close(self):
+        if self._lock is not None:
+            self._lock.close()
 
 
 def export(trainer: Trainer, state, directory) -> None:
     """What eval and play need: the policy (or the synchronizer, naming its two frozen policies), its observation
-    normalizer and the env sizes."""
-    env = trainer.env
-    frozen = state.params.get("frozen")
-    meta = {"hand": trainer.config.hand, "kind": "synchronizer" if frozen is not None else "policy",
-            "action_size": env.action_size, "goal_size": env.goal_size, "obs_size": env.obs_size,
-            "iteration": int(state.iteration), "samples": int(state.iteration) * trainer.config.batch,
-            "columns": list(trainer.columns)}
-    if frozen is not None:
-        meta["sources"] = {side: {k: m.get(k) for k in ("path", "samples", "iteration")}
+    normalizer and its spec."""
+    meta = {**trainer.spec.to_meta(), "iteration": int(state.iteration),
+            "samples": int(state.iteration) * trainer.config.batch, "columns": list(trainer.columns)}
+    if trainer.spec.kind == "synchronizer":
+        meta["sources"] = {side: {"path": PO.source_path(directory, m["path"]),
+                                  **{k: m.get(k) for k in ("samples", "iteration")}}
                            for side, m in trainer.sources.items()}
-    C.export_policy(directory, state.params["policy"], state.obs_norm, meta)
+    PO.export(directory, trainer.actor_params(state.params, state.obs_norm), meta)
 
 
-def policy_from(directory, synchronized: bool = True):
-    """(act, meta) from an exported policy or a run directory (its `policy/`): act(obs) -> mean action. For a
-    synchronizer, act plays both hands on duet observations (synchronized=False: without the latent shift)."""
-    from dexguitar.envs.core import HISTORY
-    from dexguitar.learn import networks as N
-    params, meta = C.load_policy(C.export_dir(directory))
-    if meta.get("kind") == "synchronizer":
-        from dexguitar.learn.sync import players
-        return players(params)[int(synchronized)], meta
-    policy = N.Policy(meta["action_size"])
+def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, progress: bool = True,
+          meta: dict | None = None, stop_after_calls: int | None = None, max_minutes: float | None = None,
+          init_from=None, stop_f1: float | None = None, devices: int | None = None, log=None) -> dict:
+    """Run until `iterations` iterations are done (counting those of a resumed run), `max_minutes` have passed, or
+    the training F1 of the trained hand ("both" for a duet) has been at least `stop_f1` in the last
+    `STOP_CALLS` host calls. Returns the last summary, with `compile_s` (the first call's compilation) and `calls`.
+    `devices`: how many devices share the envs (default: all)."""
+    cfg = trainer.config
+    where = Placement(devices)
+    if cfg.num_envs % where.n or cfg.minibatch % where.n:
+        raise UserError(f"{cfg.num_envs} envs and minibatches of {cfg.minibatch} do not split evenly over "
+                        f"{where.n} devices")
+    log = (log or (lambda msg: print(msg, file=sys.stderr))) if where.main else (lambda msg: None)
+    run = RunDir(out_dir, where.main)
+    try:
+        record = json.loads(json.dumps({  # as config.json holds it (tuples become lists)
+            "train": dataclasses.asdict(cfg), "env": dataclasses.asdict(trainer.env.config),
+            "columns": list(trainer.columns), "songs_digest": songs_digest(trainer.data.songs), **(meta or {})}))
+        has_ckpt = C.latest_step(run.ckpt) is not None
+        if resume:
+            run.check_resume(record)
+        elif has_ckpt:
+            raise RunError(f"{run.path} already holds a run: pass --resume to continue it, or choose another --out")
+        state = trainer.init()
+        shardings = where.shardings(state)
+        if resume and has_ckpt:            # restored straight into this run's placement, whatever the saved one
+            state, step = C.restore(run.ckpt, where.put(state, shardings))
+            run.truncate_metrics(step)
+            log(f"resumed {run.path} at iteration {int(state.iteration)}")
+        elif init_from:
+            params, meta_init = PO.load(init_from)
+            if meta_init.get("hand") != cfg.hand or meta_init.get("kind", "policy") != "policy":
+                raise UserError(f"--init-from {init_from}: a {meta_init.get('hand')} hand "
+                                f"{meta_init.get('kind', 'policy')}, not a {cfg.hand} hand policy")
+            state = state.replace(params=dict(state.params, policy=params["policy"]), obs_norm=params["obs_norm"])
+            log(f"policy initialized from {init_from} ({meta_init.get('samples', 0):,} samples)")
+        if where.main and (not resume or not run.config.exists()):
+            tmp = run.config.with_suffix(".tmp")
+            tmp.write_text(json.dumps(record, indent=2))
+            os.replace(tmp, run.config)
+        if where.n > 1:
+            log(f"{where.n} devices: {cfg.num_envs // where.n} envs and minibatches of {cfg.minibatch // where.n} "
+                f"samples each")
+        return _loop(trainer, run, where, where.put(state, shardings), iterations,
+                     progress and where.main, stop_after_calls, max_minutes, stop_f1, log)
+    finally:
+        run.close()
 
-    def act(obs):
-        frames, goal = N.split_obs(obs, HISTORY, meta["goal_size"])
-        mu, _ = policy.apply(params["policy"], N.normalize(params["obs_norm"], frames), goal)
-        return mu
-    return act, meta
+
+def _loop(trainer, run, where, state, iterations, progress, stop_after_calls, max_minutes, stop_f1, log) -> dict:
+    cfg = trainer.config
+    n = cfg.iterations_per_call
+    if int(state.iteration) >= iterations:
+        log(f"{run.path}: all {iterations} iterations are done")
+        return {"iteration": int(state.iteration), "calls": 0, "compile_s": 0.0}
+    data = where.put(trainer.data, where.replicated(trainer.data))
+    t_start = time.perf_counter()                 # `max_minutes` counts the compilation too
+    chunk = trainer.make_train_chunk(n, where).lower(state, data).compile()
+    compile_s = time.perf_counter() - t_start
+    log(f"compiled the training chunk in {compile_s:.1f} s")
+    bar = None
+    if progress:
+        from tqdm import tqdm          # noqa: PLC0415 - only for a progress display
+        bar = tqdm(total=iterations, initial=int(state.iteration), unit="it", dynamic_ncols=True, file=sys.stderr,
+                   mininterval=0.1 if sys.stderr.isatty() else 30.0)     # a log file gets a line every 30 s
+    summary, calls, rollbacks, recent = {}, 0, 0, []
+    watched = "f1/" + ("both" if cfg.hand == "duet" else cfg.hand)
+    while int(state.iteration) < iterations:
+        t0 = time.perf_counter()
+        new, metrics = chunk(state, data)
+        metrics = jax.device_get(metrics)
+        dt = time.perf_counter() - t0
+        summary = chunk_summary(metrics, n)
+        if summary.get("nonfinite/state", 0.0) > 0:
+            rollbacks += 1
+            if rollbacks > MAX_ROLLBACKS:
+                raise TrainingDiverged(f"{run.path}: the parameters became non-finite {rollbacks} times in a row, "
+                                       "even after rolling back; lower the learning rates or check the songs")
+            state = _rollback(trainer, run, where, rollbacks)
+            log(f"warning: non-finite parameters after iteration {int(new.iteration)} "
+                f"({summary.get('nonfinite/env_steps', 0):.0f} env steps and "
+                f"{summary.get('nonfinite/ppo_updates', 0):.0f} PPO updates were non-finite); rolled back to "
+                f"iteration {int(state.iteration)} with a new random key")
+            continue
+        rollbacks = 0
+        state = new
+        if summary.get("nonfinite/env_steps", 0) > 0:
+            log(f"warning: {summary['nonfinite/env_steps']:.0f} env steps went non-finite and were reset")
+        it = int(state.iteration)
+        summary.update(iteration=it, samples=it * cfg.batch, seconds=dt, samples_per_s=n * cfg.batch / dt,
+                       wall=time.perf_counter() - t_start, compile_s=compile_s)
+        C.save(run.ckpt, it, state)
+        if where.main:
+            with open(run.metrics, "a") as f:
+                f.write(json.dumps(summary) + "\n")
+            export(trainer, state, run.path / "policy")
+        calls += 1
+        if bar is not None:
+            hands = trainer.env.roles + (("both",) if len(trainer.env.roles) == 2 else ())
+            reward = np.mean([v for k, v in summary.items() if k.startswith("reward/")])
+            bar.set_postfix({"samples/s": f"{summary['samples_per_s']:,.0f}",
+                             **{f"F1 {h}": f"{summary.get('f1/' + h, float('nan')):.3f}" for h in hands},
+                             "reward": f"{reward:.3f}"})
+            bar.update(n)
+        if stop_after_calls is not None and calls >= stop_after_calls:
+            break
+        recent = (recent + [summary.get(watched, float("nan"))])[-STOP_CALLS:]
+        if stop_f1 is not None and len(recent) == STOP_CALLS and min(recent) >= stop_f1:
+            log(f"stopping at iteration {it}: training {watched} {min(recent):.3f} >= {stop_f1} in the last "
+                f"{STOP_CALLS} calls")
+            break
+        if max_minutes is not None and time.perf_counter() - t_start > 60 * max_minutes:
+            log(f"stopping after {max_minutes} minutes at iteration {it} (resume with --resume)")
+            break
+    if bar is not None:
+        bar.close()
+    return dict(summary, compile_s=compile_s, calls=calls)
+
+
+def _rollback(trainer, run, where, attempt: int):
+    """The last good state (or a fresh one) with a new random key."""
+    state = trainer.init()
+    shardings = where.shardings(state)
+    state = where.put(state, shardings)
+    if C.latest_step(run.ckpt) is not None:
+        state, _ = C.restore(run.ckpt, state)
+    state = state.replace(key=jax.random.fold_in(state.key, 7919 * attempt))
+    return where.put(state, shardings)
+
+
+def load_config(path: str | None, **overrides):
+    """(TrainConfig, EnvConfig or None) from an experiments/*.py file defining CONFIG (and optionally ENV), with
+    TrainConfig fields overridden by name (None = keep)."""
+    cfg, env = TrainConfig(), None
+    if path:
+        if not Path(path).is_file():
+            raise UserError(f"--config {path}: no such file")
+        try:
+            ns = runpy.run_path(path)
+        except Exception as err:         # noqa: BLE001 - any error in the user's config file
+            raise UserError(f"--config {path}: {type(err).__name__}: {err}") from None
+        if not isinstance(ns.get("CONFIG"), TrainConfig):
+            raise UserError(f"--config {path}: defines no CONFIG = TrainConfig(...)")
+        cfg, env = ns["CONFIG"], ns.get("ENV")
+    fields = {f.name for f in dataclasses.fields(TrainConfig)}
+    cfg = dataclasses.replace(cfg, **{k: v for k, v in overrides.items() if k in fields and v is not None})
+    try:
+        cfg.check()
+    except ValueError as err:
+        raise UserError(str(err)) from None
+    return cfg, env

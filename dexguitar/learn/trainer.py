@@ -4,6 +4,11 @@ An iteration = rollout (`lax.scan` over the vmapped env and policy) -> discrimin
 rewards -> per-column GAE with PopArt -> observation normalizer update -> PPO epochs over minibatches. Everything,
 env states included, lives in one `TrainState` pytree, so a checkpoint holds the whole run and a resumed run
 continues with exactly the iteration it would have run next.
+
+The songs and the reference motion are an argument of the compiled chunk (`Data`), padded to fixed capacities, never
+constants inside it: one compiled program serves every song set of a size. Non-finite numbers are contained where
+they arise: an env whose physics went non-finite is terminated and reset (`envs.core`), an update whose gradients
+are non-finite is skipped, and the counts come back in the metrics (`nonfinite/*`) for the host to act on.
 """
 from __future__ import annotations
 
@@ -16,10 +21,12 @@ import optax
 from flax import struct
 
 from dexguitar import envs as E
-from dexguitar.envs.core import HISTORY
 from dexguitar.learn import imitation as IM
 from dexguitar.learn import networks as N
-from dexguitar.learn import ppo as P
+from dexguitar.learn import ppo
+from dexguitar.learn.devices import Placement
+from dexguitar.learn.policy import PolicySpec, act_fn, distribution
+from dexguitar.music import timeline as TL
 
 
 @dataclasses.dataclass(frozen=True)
@@ -43,8 +50,8 @@ class TrainConfig:
     disc_buffer: int = 8192           # discriminator replay buffer size
     disc_batch: int = 512             # discriminator batch: half simulated, half reference
     disc_steps: int = 16              # discriminator minibatches per iteration
-    goal_weight: float = -1.0         # per goal column; -1 = the paper's (left 0.15 x 6, right 0.5)
-    disc_weight: float = -1.0         # per discriminator column; -1 = the paper's (left 0.05 x 2, right 0.5)
+    goal_weight: float = -1.0         # per goal column; -1 = the env's (`reward_weights`)
+    disc_weight: float = -1.0         # per discriminator column; -1 = the discriminator's (`imitation`)
     iterations: int = 100_000         # ~4e8 samples at 4096 per iteration
     iterations_per_call: int = 50     # scanned on the device between host updates
     seed: int = 42
@@ -53,10 +60,24 @@ class TrainConfig:
     def batch(self) -> int:
         return self.num_envs * self.horizon
 
-    def weights(self, env_columns: int, disc_columns: int):
-        goal = self.goal_weight if self.goal_weight >= 0 else (0.15 if env_columns > 1 else 0.5)
-        disc = self.disc_weight if self.disc_weight >= 0 else (0.05 if env_columns > 1 else 0.5)
-        return jnp.asarray([goal] * env_columns + [disc] * disc_columns, jnp.float32)
+    def check(self) -> None:
+        """Refuse sizes that cannot train, naming the field."""
+        for name in ("num_envs", "horizon", "minibatch", "epochs", "iterations", "iterations_per_call",
+                     "disc_steps", "disc_batch", "disc_buffer"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"TrainConfig.{name} must be at least 1, got {getattr(self, name)}")
+        if self.minibatch > self.batch:
+            raise ValueError(f"TrainConfig.minibatch {self.minibatch} exceeds the batch of {self.num_envs} envs x "
+                             f"{self.horizon} steps = {self.batch}")
+
+
+@struct.dataclass
+class Data:
+    """What a training chunk reads besides its state; an argument, so its values are never compiled in."""
+
+    songs: TL.Timeline             # a padded batch (`timeline.batch`)
+    reference: jnp.ndarray         # (T, 16, 7) reference link poses at 60 Hz, padded
+    reference_frames: jnp.ndarray  # int32 (): valid frames of `reference`
 
 
 @struct.dataclass
@@ -72,20 +93,42 @@ class TrainState:
     iteration: jnp.ndarray
 
 
+def reference_data(reference) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """(padded frames, count): a reference motion padded to a power-of-two length."""
+    reference = jnp.zeros((IM.FRAMES, 16, 7), jnp.float32) if reference is None else jnp.asarray(reference,
+                                                                                               jnp.float32)
+    n = reference.shape[0]
+    padded = jnp.zeros((TL.capacity(n, 1024),) + reference.shape[1:], jnp.float32).at[:n].set(reference)
+    return padded, jnp.int32(n)
+
+
+def finite(tree) -> jnp.ndarray:
+    """Are all the numbers of a pytree finite?"""
+    leaves = [jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves(tree) if jnp.issubdtype(x.dtype, jnp.inexact)]
+    return jnp.all(jnp.stack(leaves)) if leaves else jnp.bool_(True)
+
+
 class Trainer:
     """Builds the networks and the jitted iteration for one hand over a song batch and reference motions."""
 
     def __init__(self, config: TrainConfig, songs, reference: jnp.ndarray | None, env_config=None):
-        """reference: (T, 16, 7) link poses of the reference motion at 60 Hz (see `dexguitar.motion`)."""
+        """songs: timelines (or a batch); reference: (T, 16, 7) link poses of the reference motion at 60 Hz (see
+        `dexguitar.motion`), or None for no imitation."""
+        config.check()
         self.config = config
+        if not isinstance(songs, TL.Timeline):
+            songs = TL.batch(list(songs))
         self.env = E.make(config.hand, songs, env_config)
+        self.layout = self.env.layout
+        self.spec = self.make_spec()
         self.disc_specs = IM.DISCRIMINATORS[config.hand] if reference is not None else {}
-        self.reference = None if reference is None else jnp.asarray(reference, jnp.float32)
-        self.env_columns = len(self.env.reward_columns)
+        self.data = Data(self.env.songs, *reference_data(reference))
         self.columns = tuple(self.env.reward_columns) + tuple(f"disc_{n}" for n in self.disc_specs)
-        self.weights = config.weights(self.env_columns, len(self.disc_specs))
-        self.frame_size = (self.env.obs_size - self.env.goal_size) // HISTORY
-        self.policy = N.Policy(self.env.action_size)
+        goal = config.goal_weight if config.goal_weight >= 0 else None
+        disc = config.disc_weight if config.disc_weight >= 0 else None
+        self.weights = jnp.asarray([goal if goal is not None else w for w in self.env.reward_weights]
+                                   + [disc if disc is not None else d.weight for d in self.disc_specs.values()],
+                                   jnp.float32)
         self.critic = N.Critic(len(self.columns))
         self.disc = N.Discriminator()
         self.optimizers = {
@@ -94,97 +137,100 @@ class Trainer:
             "disc": optax.adam(config.disc_lr),
         }
 
+    def make_spec(self) -> PolicySpec:
+        return PolicySpec("policy", self.config.hand, self.env.action_size, self.layout)
+
     # ------------------------------------------------------------------------------------------ init
     def init(self, key=None) -> TrainState:
         cfg = self.config
         key = jax.random.PRNGKey(cfg.seed) if key is None else key
-        k_pol, k_crit, k_disc, k_env, key = jax.random.split(key, 5)
-        frames = (HISTORY, self.frame_size)
+        k_pol, k_crit, k_disc, k_env, k_age, key = jax.random.split(key, 6)
         policy, obs_norm, frozen = self.init_policy(k_pol)
+        frames = (self.layout.history, self.layout.frame_size)
         params = {
             "policy": policy,
-            "critic": N.init_params(self.critic, k_crit, frames, (self.env.goal_size + 6,)),
-            "disc": {name: N.init_params(self.disc, k, (IM.FRAMES, len(links) * 7))
-                     for (name, (links, _)), k in zip(self.disc_specs.items(),
-                                                      jax.random.split(k_disc, max(len(self.disc_specs), 1)))},
+            "critic": N.init_params(self.critic, k_crit, frames, (self.layout.goal_size + self.layout.privileged,)),
+            "disc": {name: N.init_params(self.disc, k, (IM.FRAMES, d.features))
+                     for (name, d), k in zip(self.disc_specs.items(),
+                                             jax.random.split(k_disc, max(len(self.disc_specs), 1)))},
         }
         if frozen is not None:
             params["frozen"] = frozen
         opt = {k: self.optimizers[k].init(params[k]) for k in self.optimizers}
         env_state = jax.jit(jax.vmap(self.env.reset))(jax.random.split(k_env, cfg.num_envs))
+        # Envs start at random ages, so their time-outs spread over the episode instead of all of them restarting
+        # from the home pose together every `episode_frames` steps.
+        env_state = env_state.replace(lifetime=jax.random.randint(k_age, (cfg.num_envs,), 0,
+                                                                  self.env.config.episode_frames))
         return TrainState(
             params=params, opt=opt, obs_norm=obs_norm,
-            disc_norm={n: N.normalizer_init(len(links) * 7) for n, (links, _) in self.disc_specs.items()},
-            popart=P.popart_init(len(self.columns)),
-            buffers={n: IM.buffer_init(cfg.disc_buffer, (IM.FRAMES, len(links) * 7))
-                     for n, (links, _) in self.disc_specs.items()},
+            disc_norm={n: N.normalizer_init(d.features) for n, d in self.disc_specs.items()},
+            popart=ppo.popart_init(len(self.columns)),
+            buffers={n: IM.buffer_init(cfg.disc_buffer, (IM.FRAMES, d.features)) for n, d in self.disc_specs.items()},
             env=env_state, key=key, iteration=jnp.int32(0))
 
     # ------------------------------------------------------------------------------------------ pieces
     def init_policy(self, key):
         """(trainable policy parameters, observation normalizer, frozen parameters or None)."""
-        frames = (HISTORY, self.frame_size)
-        return (N.init_params(self.policy, key, frames, (self.env.goal_size,)), N.normalizer_init(self.frame_size),
-                None)
+        return (N.init_params(N.Policy(self.env.action_size), key, (self.layout.history, self.layout.frame_size),
+                              (self.layout.goal_size,)),
+                N.normalizer_init(self.layout.frame_size), None)
 
-    def distribution(self, params, frozen, obs_norm, obs):
-        """(mean, log std) of the action on a batch of actor observations."""
-        frames, goal = N.split_obs(obs, HISTORY, self.env.goal_size)
-        return self.policy.apply(params, N.normalize(obs_norm, frames), goal)
-
-    def act(self, params, frozen, obs_norm, obs, key=None):
-        """Policy on a batch of actor observations: (action, log_prob, mean). key None = the mean action."""
-        mu, log_std = self.distribution(params, frozen, obs_norm, obs)
-        if key is None:
-            return mu, N.gaussian_log_prob(mu, log_std, mu), mu
-        action = mu + jnp.exp(log_std) * jax.random.normal(key, mu.shape)
-        return action, N.gaussian_log_prob(mu, log_std, action), mu
+    @staticmethod
+    def actor_params(params, obs_norm) -> dict:
+        """The acting parameters ({"policy", "obs_norm"[, "frozen"]}, as exported) out of the training ones."""
+        out = {"policy": params["policy"], "obs_norm": obs_norm}
+        if "frozen" in params:
+            out["frozen"] = params["frozen"]
+        return out
 
     def value(self, params, obs_norm, obs, privileged):
-        frames, goal = N.split_obs(obs, HISTORY, self.env.goal_size)
+        frames, goal = self.layout.split(obs)
         return self.critic.apply(params, N.normalize(obs_norm, frames), jnp.concatenate([goal, privileged], -1))
 
-    def disc_inputs(self, link_hist):
-        """(..., 3, hands, 16, 7) -> {name: (..., 3, F)} (the first hand is the one being trained)."""
-        return {n: IM.features(link_hist[..., 0, :, :], links, parent)
-                for n, (links, parent) in self.disc_specs.items()}
+    def rollout(self, env, ts: TrainState, key):
+        act = act_fn(self.spec, deterministic=False)
+        actor = self.actor_params(ts.params, ts.obs_norm)
 
-    def rollout(self, ts: TrainState, key):
-        def one(carry, k):
-            env_state = carry
-            action, logp, _ = self.act(ts.params["policy"], ts.params.get("frozen"), ts.obs_norm, env_state.obs, k)
-            nxt = jax.vmap(self.env.step)(env_state, action)
+        def one(env_state, k):
+            action, logp, _ = act(actor, env_state.obs, k)
+            nxt = jax.vmap(env.step)(env_state, action)
             out = dict(obs=env_state.obs, privileged=env_state.privileged, action=action, logp=logp,
                        reward=nxt.reward, done=nxt.done, terminated=nxt.terminated,
-                       link_hist=nxt.link_hist, note_end=nxt.info["note_end"],
+                       link_hist=nxt.body.link_hist, note_end=nxt.info["note_end"], nonfinite=nxt.info["nonfinite"],
                        **{f"score_{h}": nxt.info[h] for h in ("left", "right", "both")})
             return nxt, out
-        env_state, traj = jax.lax.scan(one, ts.env, jax.random.split(key, self.config.horizon))
-        return env_state, traj
+        return jax.lax.scan(one, ts.env, jax.random.split(key, self.config.horizon))
 
-    def update_discriminators(self, ts: TrainState, traj, key):
+    def disc_inputs(self, link_hist):
+        """(..., 3, hands, 16, 7) -> {name: (..., 3, F)} (the first hand is the one being imitated)."""
+        return {n: IM.features(link_hist[..., 0, :, :], d.links, d.parent) for n, d in self.disc_specs.items()}
+
+    def update_discriminators(self, ts: TrainState, traj, data: Data, key):
         cfg = self.config
         if not self.disc_specs:
             return ts.params["disc"], ts.opt["disc"], ts.disc_norm, ts.buffers, {}, []
         fake_all = self.disc_inputs(traj["link_hist"])          # (T, E, 3, F)
         half = cfg.disc_batch // 2
         k_ins, k_steps, key = jax.random.split(key, 3)
-        params, opt, norms, buffers, rewards = dict(ts.params["disc"]), ts.opt["disc"], {}, {}, []
-        for i, (name, (links, parent)) in enumerate(self.disc_specs.items()):
+        norms, buffers, rewards = {}, {}, []
+
+        def reference(k, n, d):
+            return IM.features(IM.sample_reference(k, data.reference, data.reference_frames, n), d.links, d.parent)
+        for i, (name, d) in enumerate(self.disc_specs.items()):
             k_ref, k_pick = jax.random.split(jax.random.fold_in(k_ins, i))
             fake = fake_all[name].reshape((-1,) + fake_all[name].shape[-2:])
-            ref = IM.features(IM.sample_reference(k_ref, self.reference, fake.shape[0] // 4 + 1), links, parent)
-            norms[name] = N.normalizer_update(N.normalizer_update(ts.disc_norm[name], fake), ref)
+            norms[name] = N.normalizer_update(N.normalizer_update(ts.disc_norm[name], fake),
+                                              reference(k_ref, fake.shape[0] // 4 + 1, d))
             pick = jax.random.permutation(k_pick, fake.shape[0])[:cfg.disc_buffer // 4]
             buffers[name] = IM.buffer_add(ts.buffers[name], fake[pick])
 
         def loss_fn(p, k):
             total, log = 0.0, {}
-            for name, (links, parent) in self.disc_specs.items():
+            for name, d in self.disc_specs.items():
                 k1, k2, k3, k = jax.random.split(k, 4)
                 fake = N.normalize(norms[name], IM.buffer_sample(k1, buffers[name], half), clip=1e9)
-                real = IM.features(IM.sample_reference(k2, self.reference, half), links, parent)
-                real = N.normalize(norms[name], real, clip=1e9)
+                real = N.normalize(norms[name], reference(k2, half, d), clip=1e9)
                 loss, log_n = IM.hinge_loss(lambda pp, x: self.disc.apply(pp, x), p[name], real, fake, k3,
                                             cfg.gp_weight)
                 total = total + loss
@@ -194,10 +240,15 @@ class Trainer:
         def step(carry, k):
             p, o = carry
             (_, log), grads = jax.value_and_grad(loss_fn, has_aux=True)(p, k)
-            updates, o = self.optimizers["disc"].update(grads, o, p)
-            return (optax.apply_updates(p, updates), o), log
-        (params, opt), log = jax.lax.scan(step, (params, opt), jax.random.split(k_steps, cfg.disc_steps))
-        logs = jax.tree.map(jnp.mean, log)
+            updates, o2 = self.optimizers["disc"].update(grads, o, p)
+            ok = finite(grads)
+            p, o = jax.tree.map(lambda new, old: jnp.where(ok, new, old), (optax.apply_updates(p, updates), o2),
+                                (p, o))
+            return (p, o), dict(log, skipped=1.0 - ok.astype(jnp.float32))
+        (params, opt), log = jax.lax.scan(step, (ts.params["disc"], ts.opt["disc"]),
+                                          jax.random.split(k_steps, cfg.disc_steps))
+        skipped = jnp.sum(log.pop("skipped"))
+        logs = dict(jax.tree.map(jnp.mean, log), **{"nonfinite/disc_updates": skipped})
         for name in self.disc_specs:
             x = N.normalize(norms[name], fake_all[name], clip=1e9)
             rewards.append(N.disc_reward(self.disc.apply(params[name], x)))
@@ -207,21 +258,19 @@ class Trainer:
         cfg = self.config
         n = batch["obs"].shape[0]
         n_mb = max(n // cfg.minibatch, 1)
-        ts_norm, frozen = ts.obs_norm, ts.params.get("frozen")
+        obs_norm, frozen = ts.obs_norm, ts.params.get("frozen")
 
         def loss_fn(params, mb):
-            frames, goal = N.split_obs(mb["obs"], HISTORY, self.env.goal_size)
-            mu, log_std = self.distribution(params["policy"], frozen, ts_norm, mb["obs"])
+            actor = self.actor_params(dict(params, **({"frozen": frozen} if frozen is not None else {})), obs_norm)
+            mu, log_std = distribution(self.spec, actor, mb["obs"])
             logp = N.gaussian_log_prob(mu, log_std, mb["action"])
-            pl, clipped = P.policy_loss(logp, mb["logp"], mb["adv"], cfg.clip)
-            v = self.critic.apply(params["critic"], N.normalize(ts_norm, frames),
-                                  jnp.concatenate([goal, mb["privileged"]], -1))
+            pl, clipped = ppo.policy_loss(logp, mb["logp"], mb["adv"], cfg.clip)
+            v = self.value(params["critic"], obs_norm, mb["obs"], mb["privileged"])
             vl = jnp.mean(jnp.sum((v - mb["target"]) ** 2, -1)) / v.shape[-1]
             return pl + cfg.value_coef * vl, {"policy_loss": pl, "value_loss": vl, "clip_frac": clipped,
                                               "std": jnp.mean(jnp.exp(log_std))}
 
         def epoch(carry, k):
-            params, opt = carry
             perm = jax.random.permutation(k, n)[: n_mb * cfg.minibatch].reshape(n_mb, cfg.minibatch)
 
             def minibatch(carry, idx):
@@ -232,57 +281,64 @@ class Trainer:
                 for name in ("policy", "critic"):
                     updates, new_opt[name] = self.optimizers[name].update(grads[name], opt[name], params[name])
                     new_params[name] = optax.apply_updates(params[name], updates)
-                return (new_params, new_opt), log
-            return jax.lax.scan(minibatch, (params, opt), perm)
+                ok = finite(grads)
+                carry = jax.tree.map(lambda new, old: jnp.where(ok, new, old), (new_params, new_opt),
+                                     (params, opt))
+                return carry, dict(log, skipped=1.0 - ok.astype(jnp.float32))
+            return jax.lax.scan(minibatch, carry, perm)
 
         params = {"policy": ts.params["policy"], "critic": ts.params["critic"]}
         opt = {"policy": ts.opt["policy"], "critic": ts.opt["critic"]}
         (params, opt), log = jax.lax.scan(epoch, (params, opt), jax.random.split(key, cfg.epochs))
-        return params, opt, jax.tree.map(jnp.mean, log)
+        skipped = jnp.sum(log.pop("skipped"))
+        return params, opt, dict(jax.tree.map(jnp.mean, log), **{"nonfinite/ppo_updates": skipped})
 
     # ------------------------------------------------------------------------------------------ iteration
-    def iteration(self, ts: TrainState, _=None):
+    def iteration(self, ts: TrainState, data: Data):
         cfg = self.config
+        env = self.env.bind(data.songs)
         k_roll, k_disc, k_ppo, key = jax.random.split(ts.key, 4)
-        env_state, traj = self.rollout(ts, k_roll)
+        env_state, traj = self.rollout(env, ts, k_roll)
 
         disc_params, disc_opt, disc_norm, buffers, disc_log, disc_rewards = self.update_discriminators(
-            ts, traj, k_disc)
+            ts, traj, data, k_disc)
         rewards = traj["reward"]
         if disc_rewards:
             d = jnp.stack(disc_rewards, -1)
-            d = jnp.where(traj["terminated"][..., None], self.env.config.terminate_reward, d)
+            d = jnp.where(traj["terminated"][..., None], env.config.terminate_reward, d)
             rewards = jnp.concatenate([rewards, d], -1)
 
         # values (normalized outputs -> returns scale) at every step and after the last one
         all_obs = jnp.concatenate([traj["obs"], env_state.obs[None]])
         all_priv = jnp.concatenate([traj["privileged"], env_state.privileged[None]])
-        values = P.popart_denormalize(ts.popart, self.value(ts.params["critic"], ts.obs_norm, all_obs, all_priv))
-        adv, returns = P.gae(rewards, values[:-1], values[1:], traj["terminated"], traj["done"], cfg.gamma, cfg.lam)
-        weighted = P.standardize_advantages(adv, self.weights)
+        values = ppo.popart_denormalize(ts.popart, self.value(ts.params["critic"], ts.obs_norm, all_obs, all_priv))
+        adv, returns = ppo.gae(rewards, values[:-1], values[1:], traj["terminated"], traj["done"], cfg.gamma,
+                               cfg.lam)
+        weighted = ppo.standardize_advantages(adv, self.weights)
 
         critic = ts.params["critic"]
-        popart, kernel, bias = P.popart_update(ts.popart, returns, critic["params"]["value"]["kernel"],
-                                               critic["params"]["value"]["bias"])
+        popart, kernel, bias = ppo.popart_update(ts.popart, returns, critic["params"]["value"]["kernel"],
+                                                 critic["params"]["value"]["bias"])
         critic = {**critic, "params": {**critic["params"], "value": {"kernel": kernel, "bias": bias}}}
-        frames, _ = N.split_obs(traj["obs"], HISTORY, self.env.goal_size)
+        frames, _ = self.layout.split(traj["obs"])
         obs_norm = N.normalizer_update(ts.obs_norm, frames)
 
         flat = lambda x: x.reshape((-1,) + x.shape[2:])  # noqa: E731
         batch = {"obs": flat(traj["obs"]), "privileged": flat(traj["privileged"]), "action": flat(traj["action"]),
                  "logp": flat(traj["logp"]), "adv": flat(weighted),
-                 "target": flat(P.popart_normalize(popart, returns))}
+                 "target": flat(ppo.popart_normalize(popart, returns))}
         ts_mid = ts.replace(obs_norm=obs_norm, params=dict(ts.params, critic=critic))
         params, opt, ppo_log = self.ppo_update(ts_mid, batch, k_ppo)
 
         metrics = {"reward/" + c: jnp.mean(rewards[..., i]) for i, c in enumerate(self.columns)}
-        for h in ("left", "right", "both"):
+        for h in self.env.roles + (("both",) if len(self.env.roles) == 2 else ()):
             score = traj[f"score_{h}"]       # [precision, recall, f1, tp, predicted, targets] at note ends
             counted = (traj["note_end"] & (score[..., 4] + score[..., 5] > 0)).astype(jnp.float32)
             metrics[f"f1/{h}"] = jnp.sum(score[..., 2] * counted)
             metrics[f"notes/{h}"] = jnp.sum(counted)
         metrics["episodes"] = jnp.sum(traj["done"].astype(jnp.float32))
         metrics["terminations"] = jnp.sum(traj["terminated"].astype(jnp.float32))
+        metrics["nonfinite/env_steps"] = jnp.sum(traj["nonfinite"].astype(jnp.float32))
         metrics.update(ppo_log)
         metrics.update(disc_log)
         new = ts.replace(
@@ -290,12 +346,20 @@ class Trainer:
             opt={"policy": opt["policy"], "critic": opt["critic"], "disc": disc_opt},
             obs_norm=obs_norm, disc_norm=disc_norm, popart=popart, buffers=buffers, env=env_state, key=key,
             iteration=ts.iteration + 1)
+        metrics["nonfinite/state"] = 1.0 - finite((new.params, new.opt, new.obs_norm, new.popart)).astype(
+            jnp.float32)
         return new, metrics
 
-    def make_train_chunk(self, n: int):
-        """A jitted function running n iterations in one `lax.scan`; metrics summed over the chunk (sums of F1
-        and note counts, so the host can form the mean F1 per note)."""
-        def chunk(ts):
-            ts, metrics = jax.lax.scan(self.iteration, ts, None, length=n)
+    def make_train_chunk(self, n: int, placement: Placement | None = None):
+        """A jitted function (state, data) -> (state, metrics) running n iterations in one `lax.scan`; metrics
+        summed over the chunk (sums of F1 and note counts, so the host can form the mean F1 per note). The state
+        is split over the devices of `placement` (default: every device) and comes back placed as it went in, so
+        every call runs the one compiled program."""
+        placement = placement or Placement()
+        state = placement.shardings(jax.eval_shape(self.init))
+
+        def chunk(ts, data):
+            ts, metrics = jax.lax.scan(lambda s, _: self.iteration(s, data), ts, None, length=n)
             return ts, jax.tree.map(lambda x: jnp.sum(x) if x.ndim else x, metrics)
-        return jax.jit(chunk, donate_argnums=0)
+        return jax.jit(chunk, donate_argnums=0, in_shardings=(state, placement.replicated(self.data)),
+                       out_shardings=(state, placement.whole))

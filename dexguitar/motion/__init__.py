@@ -1,21 +1,22 @@
 """Reference motions: one hand's joint values over time (`Motion`), their files, forward kinematics to the link
-states the envs observe, the authors' clip reader, the shipped default clips and rendering.
+states the envs observe, the IK planner, the authors' clip reader, the shipped default clips and rendering.
 
     format      Motion, save / load (.npz, .json), resample, validate
-    kinematics  link_states, reference_frames, finger_segments, velocities
+    kinematics  HandKinematics (guitar-frame FK); link_states, reference_frames, finger_segments, velocities
+    planner     the IK planner: Notes, Tracker, ScriptedLeft / ScriptedRight, ScriptedPlayer (plays through an env)
     official    read_official_json (the authors' JSON clips, converted to our joints)
     defaults    default_motion(hand), and `python -m dexguitar.motion.defaults` to regenerate the clips
     render      render_motion (PNG strip, or .mp4 with imageio-ffmpeg)
     cli         `motion render`, `motion info`
 """
+from pathlib import Path
+
+from dexguitar.motion import defaults, official
 from dexguitar.motion.format import Motion, MotionError, load, resample, save, validate
 
 
 def load_motion(source) -> Motion:
     """A motion from "left" / "right" (the shipped defaults), a .npz / .json of ours, or the authors' JSON clip."""
-    from pathlib import Path
-
-    from dexguitar.motion import defaults, official
     if str(source) in defaults.CLIPS and not Path(str(source)).exists():
         return defaults.default_motion(str(source))
     if official.is_official_json(source):

@@ -10,15 +10,20 @@ JSON clips (converted on the fly).
 """
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 import warnings
 
 import numpy as np
 
+from dexguitar.motion import load_motion
+from dexguitar.motion.format import MotionError, joint_names, joint_ranges
+from dexguitar.motion.render import render_motion
+from dexguitar.motion.retarget import IKConfig, Registration, RetargetError, retarget_file
+
 
 def motion_summary(motion) -> dict:
-    from dexguitar.motion.format import joint_names, joint_ranges
     q = np.asarray(motion.qpos, np.float64)
     rng = joint_ranges(motion.hand)
     lo, hi = q.min(0), q.max(0)
@@ -32,7 +37,6 @@ def motion_summary(motion) -> dict:
 
 
 def _load(source):
-    from dexguitar.motion import load_motion
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         motion = load_motion(source)
@@ -42,7 +46,6 @@ def _load(source):
 
 
 def _info(args) -> int:
-    from dexguitar.motion.format import MotionError
     try:
         motion = _load(args.motion)
     except MotionError as err:
@@ -61,8 +64,6 @@ def _info(args) -> int:
 
 
 def _render(args) -> int:
-    from dexguitar.motion.format import MotionError
-    from dexguitar.motion.render import render_motion
     try:
         motion = _load(args.motion)
         out = render_motion(motion, args.out, frames=args.frames, width=args.width, height=args.height,
@@ -75,8 +76,6 @@ def _render(args) -> int:
 
 
 def _retarget(args) -> int:
-    from dexguitar.motion.format import MotionError
-    from dexguitar.motion.retarget import IKConfig, Registration, RetargetError, retarget_file
     cfg = IKConfig(calibrate=not args.no_calibrate, free_nails=args.free_nails)
     log = lambda msg: print(f"warning: {msg}", file=sys.stderr)   # noqa: E731
     try:
@@ -145,7 +144,6 @@ def add_motion_commands(subparsers) -> None:
 
 def main(argv=None) -> int:
     """Stand-alone entry (`python -m dexguitar.motion.cli ...`) until the main CLI wires these commands in."""
-    import argparse
     parser = argparse.ArgumentParser(prog="dexguitar")
     add_motion_commands(parser.add_subparsers(dest="command", required=True))
     args = parser.parse_args(argv)

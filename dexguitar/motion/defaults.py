@@ -1,8 +1,8 @@
 """The shipped default reference motions, and the tool that makes them (`python -m dexguitar.motion.defaults`).
 
 Why our own clips: motion imitation needs reference link states for both hands, and the authors' motion-capture data
-may not be redistributed. These clips are made here, deterministically, by the scripted IK player
-(`dexguitar.perform.scripted`) playing procedural exercises through MuJoCo C physics:
+may not be redistributed. These clips are made here, deterministically, by the IK planner
+(`dexguitar.motion.planner`) playing procedural exercises through MuJoCo C physics:
 
 * left, "scale practice" (`left_scale_practice.npz`, ~40 s): after a 1/8 rest, two-octave major scales in four
   one-finger-per-fret boxes along the neck (G at fret 2, C at 7, F at 12, E at 16), each up and back down in 1/8
@@ -11,8 +11,8 @@ may not be redistributed. These clips are made here, deterministically, by the s
 * right, "picking" (`right_picking.npz`, ~15 s): single-string alternate picking (strings 1, 3, 5), a run over
   neighbouring strings 6 -> 1 -> 6, full strums down and up, and partial strums (strings 1-3, 4-6, 2-4, 3-5).
 
-How: the song becomes a `Timeline`, then `scripted.Notes`; the scripted hand plans the desired joint trajectory
-(IK on fingertip / pick targets with MuJoCo kinematics, minimum-jerk between keyframes), and `scripted.Tracker`
+How: the song becomes a `Timeline`, then `planner.Notes`; the scripted hand plans the desired joint trajectory
+(IK on fingertip / pick targets with MuJoCo kinematics, minimum-jerk between keyframes), and `planner.Tracker`
 turns it into PD targets and steps `mujoco.mj_step` 4 substeps per 60 Hz frame on the env's one-hand scene. The
 simulated qpos after every frame (the first frame is the home pose) is the clip: a physically feasible motion of
 our own hand model, stored as float32 at 60 fps.
@@ -23,10 +23,18 @@ import functools
 import time
 from pathlib import Path
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
+from dexguitar.motion import kinematics as K
+from dexguitar.motion import planner as PL
 from dexguitar.motion.format import Motion, load, save
+from dexguitar.music import procedural
+from dexguitar.music import timeline as TL
 from dexguitar.music.song import MUTE, OPEN, Song, make_note
+from dexguitar.world import detect
+from dexguitar.world import scene as S
 
 CLIPS_DIR = Path(__file__).resolve().parent / "clips"
 CLIPS = {"left": "left_scale_practice.npz", "right": "right_picking.npz"}
@@ -48,10 +56,9 @@ def _strings(lo: int, hi: int, duration):
 
 def left_song() -> Song:
     """Scale practice: each box's two-octave major scale up then down, 1/8 notes at 100 BPM (~40 s)."""
-    from dexguitar.music import procedural as P
     notes = [make_note("1/8", [MUTE] * 6)]                  # a rest: time to reach the first position
     for root, start in LEFT_BOXES:
-        run = P.scale_run(start, root, "major")
+        run = procedural.scale_run(start, root, "major")
         notes += [_single(s, f) for s, f in run + run[-2::-1]]
     return Song(TEMPO, tuple(notes), "left scale practice")
 
@@ -72,25 +79,21 @@ def right_song() -> Song:
 SONGS = {"left": left_song, "right": right_song}
 
 
-def _notes(song: Song):
-    from dexguitar.music import timeline as TL
-    from dexguitar.perform import scripted as SC
+def _notes(song: Song) -> PL.Notes:
     tl = TL.from_song(song)
     n = int(tl.n_notes)
-    return SC.Notes(np.asarray(tl.left)[:n].astype(int), np.asarray(tl.pick)[:n].astype(bool),
+    return PL.Notes(np.asarray(tl.left)[:n].astype(int), np.asarray(tl.pick)[:n].astype(bool),
                     np.asarray(tl.onset)[:n + 1].astype(int))
 
 
 def record(hand: str, song: Song | None = None) -> Motion:
     """Play `song` (default: the hand's practice song) with the scripted hand through MuJoCo C physics and return
     the simulated joint values at 60 fps."""
-    from dexguitar.perform import scripted as SC
-    from dexguitar.world import scene as S
     song = song or SONGS[hand]()
     notes = _notes(song)
-    player = SC.ScriptedLeft() if hand == "left" else SC.ScriptedRight()
+    player = PL.ScriptedLeft() if hand == "left" else PL.ScriptedRight()
     q_des = player.desired(notes)
-    tracker = SC.Tracker(hand, (hand,))
+    tracker = PL.Tracker(hand)
     _, q = tracker.track(q_des)
     qadr = np.asarray(S.hand_index(tracker.model, hand).qpos)
     return Motion(hand, FPS, q[:, qadr], name=song.title)
@@ -116,11 +119,6 @@ def default_motion(hand: str) -> Motion:
 def press_report(motion: Motion, song: Song | None = None) -> dict:
     """How well a left-hand motion holds its song's notes: per frame the frets detected (`world.detect`) on FK
     finger segments, compared with the note sounding at that frame (2nd half of each note: after the press)."""
-    import jax
-    import jax.numpy as jnp
-
-    from dexguitar.motion import kinematics as K
-    from dexguitar.world import detect
     song = song or left_song()
     notes = _notes(song)
     segs = K.finger_segments(motion)
@@ -140,10 +138,6 @@ def press_report(motion: Motion, song: Song | None = None) -> dict:
 
 def pick_report(motion: Motion, song: Song | None = None) -> dict:
     """Strings crossed by the pick along the FK path, against the strings the song picks."""
-    import jax.numpy as jnp
-
-    from dexguitar.motion import kinematics as K
-    from dexguitar.world import detect
     song = song or right_song()
     notes = _notes(song)
     p = K.pick_positions(motion)

@@ -1,4 +1,5 @@
-"""Forward kinematics of motions: joint values -> key-link states in the guitar frame, as the envs observe them.
+"""Forward kinematics in the guitar frame, the one implementation: motions (joint values) -> key-link states as the
+envs observe them, and single poses for the IK planner (`motion.planner`).
 
 The motion-imitation discriminator compares simulated link states (`GuitarEnv.link_states`: (hands, 16, 7) position
 + unit quaternion wxyz with w >= 0, guitar frame, `hands.KEY_LINKS` order) with reference ones, so references must be
@@ -20,26 +21,17 @@ import numpy as np
 from dexguitar.motion.format import Motion, resample
 from dexguitar.world import hands as H
 from dexguitar.world import scene as S
-
-
-def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton product of wxyz quaternions (..., 4), numpy."""
-    w1, x1, y1, z1 = np.moveaxis(a, -1, 0)
-    w2, x2, y2, z2 = np.moveaxis(b, -1, 0)
-    return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2], axis=-1)
-
-
-def quat_conj(q: np.ndarray) -> np.ndarray:
-    return q * np.array([1.0, -1.0, -1.0, -1.0])
-
-
-def positive_w(q: np.ndarray) -> np.ndarray:
-    return np.where(q[..., :1] < 0, -q, q)
+from dexguitar.world.geometry import positive_w, quat_conj, quat_mul
 
 
 class HandKinematics:
-    """One hand's forward kinematics in its env scene (cached per (role, mirror) by `hand_kinematics`)."""
+    """One hand's forward kinematics in its env scene, in the guitar frame.
+
+    Two uses, one implementation: whole motions (`link_states`, `finger_segments`, `sites`) for reference clips, and
+    one pose at a time (`set`, then `site`, `body`, `segments`, `site_jac`) for the IK planner (`motion.planner`).
+    The reference code shares instances through `hand_kinematics`; the planner makes its own, since it leaves a pose
+    set between calls.
+    """
 
     def __init__(self, role: str, mirror: bool = False):
         self.role, self.mirror = role, mirror
@@ -51,6 +43,10 @@ class HandKinematics:
         self.bodies = np.asarray(self.hand.key_bodies)
         self.g_pos, self.g_rot = S.guitar_pose(self.model)
         self.g_quat_inv = quat_conj(S.guitar_quat(mirror))
+        self.home = self.data.qpos[self.qadr].copy()
+        # joint ids and qpos addresses coincide (hinges and slides only)
+        self.lo = self.model.jnt_range[:, 0][self.qadr].copy()
+        self.hi = self.model.jnt_range[:, 1][self.qadr].copy()
 
     def model_qpos(self, motion: Motion) -> np.ndarray:
         """(T, 27) joint values for this scene's hand model: the motion's, mirrored when the setup is."""
@@ -61,15 +57,37 @@ class HandKinematics:
 
     def run(self, qpos: np.ndarray):
         """Yield MjData after kinematics of every frame of (T, 27) model joint values (the same object each time)."""
-        d = self.data
         for q in qpos:
-            d.qpos[self.qadr] = q
-            mujoco.mj_kinematics(self.model, d)
-            yield d
+            self.set(q)
+            yield self.data
 
     def to_guitar(self, p: np.ndarray) -> np.ndarray:
         return (p - self.g_pos) @ self.g_rot
 
+    # --- one pose at a time
+    def set(self, q: np.ndarray) -> None:
+        """Pose the hand at model joint values q (27,)."""
+        self.data.qpos[self.qadr] = q
+        mujoco.mj_kinematics(self.model, self.data)
+
+    def site(self, sid: int) -> np.ndarray:
+        return self.to_guitar(self.data.site_xpos[sid])
+
+    def body(self, bid: int) -> np.ndarray:
+        return self.to_guitar(self.data.xpos[bid])
+
+    def segments(self) -> np.ndarray:
+        """(12, 2, 3) finger axis segments index..pinky, proximal..distal."""
+        return self.to_guitar(S.finger_segments(self.data.xpos, self.data.site_xpos, self.hand))
+
+    def site_jac(self, sid: int) -> np.ndarray:
+        """(3, 27) Jacobian of a site's guitar-frame position w.r.t. this hand's joints (after `set`)."""
+        mujoco.mj_comPos(self.model, self.data)
+        jp = np.zeros((3, self.model.nv))
+        mujoco.mj_jacSite(self.model, self.data, jp, None, sid)
+        return self.g_rot.T @ jp[:, self.qadr]     # qpos and dof addresses coincide (hinges and slides only)
+
+    # --- whole motions
     def link_states(self, qpos: np.ndarray) -> np.ndarray:
         pos = np.empty((len(qpos), len(self.bodies), 3))
         quat = np.empty((len(qpos), len(self.bodies), 4))
@@ -81,8 +99,8 @@ class HandKinematics:
 
     def finger_segments(self, qpos: np.ndarray) -> np.ndarray:
         out = np.empty((len(qpos), 12, 2, 3))
-        for t, d in enumerate(self.run(qpos)):
-            out[t] = self.to_guitar(S.finger_segments(d.xpos, d.site_xpos, self.hand))
+        for t, _ in enumerate(self.run(qpos)):
+            out[t] = self.segments()
         return out
 
     def sites(self, qpos: np.ndarray, site_ids) -> np.ndarray:

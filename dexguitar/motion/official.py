@@ -23,17 +23,16 @@ joint angles:
   is at most 0.5 deg for index..ring and 3 deg for the pinky (its MCP bends most in both axes).
 
 The frame rate is kept (resample with `format.resample`). Values outside our joint ranges are clipped, with one
-warning giving the count. Errors name the file and the frame.
+warning giving the count. Errors are `MotionError`s naming the file and the frame (and body) where they apply.
 """
 from __future__ import annotations
 
-import json
 import warnings
 from pathlib import Path
 
 import numpy as np
 
-from dexguitar.motion.format import Motion, MotionError, clip_to_ranges, joint_names
+from dexguitar.motion.format import Motion, MotionError, clip_to_ranges, joint_names, read_json, validate
 from dexguitar.world import hands as H
 
 PREFIXES = {"LH": "left", "RH": "right"}
@@ -113,12 +112,14 @@ def _layout():
 LAYOUT = _layout()
 
 
-def _infer_hand(path, frame0: dict) -> str:
+def _infer_hand(path, frame0) -> str:
+    if not isinstance(frame0, dict):
+        raise MotionError(path, "frame 0", f"a frame must be an object of body values, got {type(frame0).__name__}")
     prefixes = {k.split(":", 1)[0] for k in frame0 if ":" in k}
     hands = {PREFIXES[p] for p in prefixes if p in PREFIXES}
     if len(hands) != 1:
-        raise MotionError(f"{path}: frame 0: cannot tell the hand from body names (prefixes {sorted(prefixes)}; "
-                          f"expected LH: or RH:)")
+        raise MotionError(path, "frame 0", f"cannot tell the hand from body names (prefixes {sorted(prefixes)}; "
+                                           f"expected LH: or RH:)")
     return hands.pop()
 
 
@@ -126,27 +127,20 @@ def read_official_json(path: str | Path, hand: str | None = None) -> Motion:
     """The authors' JSON motion clip as a `Motion` of our joints at the clip's frame rate. `hand` ("left" /
     "right") picks one hand where a clip holds both; by default it is inferred from the LH: / RH: prefix."""
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise MotionError(f"{path}: no such file") from None
-    except json.JSONDecodeError as e:
-        raise MotionError(f"{path}: not valid JSON ({e})") from None
+    doc = read_json(path)
     if not isinstance(doc, dict) or not isinstance(doc.get("frames"), list) or "fps" not in doc:
-        raise MotionError(f"{path}: expected an object with 'fps' and a list 'frames'")
+        raise MotionError(path, None, "expected an object with 'fps' and a list 'frames'")
     frames = doc["frames"]
     if not frames:
-        raise MotionError(f"{path}: no frames")
+        raise MotionError(path, None, "no frames")
     try:
         fps = float(doc["fps"])
     except (TypeError, ValueError):
-        raise MotionError(f"{path}: fps must be a number, got {doc['fps']!r}") from None
-    if not fps > 0:
-        raise MotionError(f"{path}: fps must be positive, got {fps}")
+        raise MotionError(path, None, f"fps must be a number, got {doc['fps']!r}") from None
     if hand is None:
         hand = _infer_hand(path, frames[0])
     if hand not in PREFIXES.values():
-        raise MotionError(f"{path}: hand must be 'left' or 'right', got {hand!r}")
+        raise MotionError(path, None, f"hand must be 'left' or 'right', got {hand!r}")
     prefix = next(p for p, h in PREFIXES.items() if h == hand) + ":"
 
     # Gather every body's values into arrays, checking shapes frame by frame.
@@ -157,16 +151,16 @@ def read_official_json(path: str | Path, hand: str | None = None) -> Motion:
         rows = np.empty((len(frames), size))
         for t, fr in enumerate(frames):
             if not isinstance(fr, dict) or key not in fr:
-                raise MotionError(f"{path}: frame {t}: missing body {key!r}")
+                raise MotionError(path, f"frame {t}", f"missing body {key!r}")
             v = fr[key]
             try:
                 rows[t] = v
             except (TypeError, ValueError):
-                raise MotionError(f"{path}: frame {t}: {key} must be {size} numbers, got {v!r}") from None
+                raise MotionError(path, f"frame {t}", f"{key} must be {size} numbers, got {v!r}") from None
             if not np.all(np.isfinite(rows[t])):
-                raise MotionError(f"{path}: frame {t}: {key} has a non-finite value {v!r}")
+                raise MotionError(path, f"frame {t}", f"{key} has a non-finite value {v!r}")
             if size == 4 and np.linalg.norm(rows[t]) < 1e-6:
-                raise MotionError(f"{path}: frame {t}: {key} is not a rotation (zero quaternion)")
+                raise MotionError(path, f"frame {t}", f"{key} is not a rotation (zero quaternion)")
         values[body] = rows
 
     names = joint_names(hand)
@@ -188,15 +182,18 @@ def read_official_json(path: str | Path, hand: str | None = None) -> Motion:
         worst = np.abs(clipped - qpos).max()
         warnings.warn(f"{path}: {n_clipped} joint values clipped to our joint ranges, at most by {worst:.3f} "
                       f"({', '.join(moved)})", stacklevel=2)
-    qpos = clipped
-    return Motion(hand, fps, qpos, name=path.stem)
+    return validate(Motion(hand, fps, clipped, name=path.stem), path)
 
 
 def is_official_json(path: str | Path) -> bool:
-    """Cheap test: a .json whose start mentions "frames" (ours has "qpos")."""
+    """Cheap test: a .json file whose start mentions "frames" (ours has "qpos"). Any file that is not, or cannot be
+    read, goes to `format.load`, which says what is wrong with it."""
     path = Path(path)
-    if path.suffix != ".json" or not path.exists():
+    if path.suffix != ".json" or not path.is_file():
         return False
-    with open(path) as f:
-        head = f.read(4096)
-    return '"frames"' in head and '"qpos"' not in head
+    try:
+        with open(path, "rb") as f:
+            head = f.read(4096)
+    except OSError:
+        return False
+    return b'"frames"' in head and b'"qpos"' not in head

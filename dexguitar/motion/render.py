@@ -1,14 +1,13 @@
 """Pictures of a motion: a PNG strip of evenly spaced frames, or an .mp4 video (with `imageio-ffmpeg`).
 
-Rendering uses MuJoCo's own OpenGL renderer on the full visual scene (`scene.build_spec(hand, visual=True)`), with
-a free camera looking at the hand (or the scene's "front" camera). Headless machines need an offscreen GL: we use
-`MUJOCO_GL` when it names egl / osmesa, else try OSMesa, then EGL. The context is made here (not by
-`mujoco.Renderer`, which fixes its GL backend when `mujoco` is first imported). PNGs are written by a small zlib
-encoder, so no imaging library is needed.
+Rendering uses MuJoCo's own OpenGL renderer on the render-only stage of the hand's scene (`world.stage`), with a
+free camera looking at the hand (or the stage's "front" camera). Headless machines need an offscreen GL: the
+context comes from `glcheck` (OSMesa or EGL, whichever really works; not `mujoco.Renderer`, which fixes
+its GL backend when `mujoco` is first imported). PNGs are written by a small zlib encoder, so no imaging library
+is needed.
 """
 from __future__ import annotations
 
-import os
 import struct
 import zlib
 from pathlib import Path
@@ -16,8 +15,11 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from dexguitar.motion import glcheck
+from dexguitar.motion import kinematics as K
 from dexguitar.motion.format import Motion
 from dexguitar.world import scene as S
+from dexguitar.world import stage
 
 
 # ----------------------------------------------------------------------------------------------------- PNG
@@ -50,36 +52,27 @@ def png_size(path: str | Path) -> tuple[int, int]:
 
 # ----------------------------------------------------------------------------------------------------- GL
 
-def _gl_context(width: int, height: int):
-    """An offscreen OpenGL context: MUJOCO_GL's choice when it is egl / osmesa, else OSMesa, then EGL."""
-    choice = os.environ.get("MUJOCO_GL", "").lower()
-    order = [choice] if choice in ("egl", "osmesa") else ["osmesa", "egl"]
-    errors = []
-    for name in order:
-        try:
-            if name == "osmesa":
-                from mujoco.osmesa import GLContext
-            else:
-                from mujoco.egl import GLContext
-            ctx = GLContext(width, height)
-            ctx.make_current()
-            return ctx
-        except Exception as e:     # noqa: BLE001 - missing libraries surface as many error types
-            errors.append(f"{name}: {type(e).__name__}: {e}")
-    raise RuntimeError("no offscreen OpenGL for rendering (" + "; ".join(errors) + "). Install libosmesa6 "
-                       "(Debian/Ubuntu) or an EGL driver, or set MUJOCO_GL=egl|osmesa.")
+FONT_SCALES = (50, 100, 150, 200, 250, 300)      # MuJoCo's font sizes, percent
+CAPTION_FONT_AT_720 = 150
+
+
+def font_scale(height: int) -> mujoco.mjtFontScale:
+    """The font size for a frame `height`: 150 % at 720 lines, so a caption takes the same share of any frame."""
+    want = height / 720 * CAPTION_FONT_AT_720
+    return mujoco.mjtFontScale(min(FONT_SCALES, key=lambda s: abs(s - want)))
 
 
 class Offscreen:
-    """MuJoCo's renderer on an offscreen GL context: pixels of a model's data seen from a camera. Shared by the
-    motion strips and the performance videos. `fast`: no shadows (software GL spends most of a frame on them)."""
+    """MuJoCo's renderer on an offscreen GL context: pixels of a model's data seen from a camera, with an optional
+    caption. Shared by the motion strips and the performance videos. `fast`: no shadows (software GL spends most
+    of a frame on them). Raises `glcheck.NoGL` when this machine has no offscreen OpenGL."""
 
     def __init__(self, model: mujoco.MjModel, width: int, height: int, fast: bool = False):
         model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
         model.vis.global_.offheight = max(model.vis.global_.offheight, height)
         self.model, self.width, self.height = model, width, height
-        self._ctx = _gl_context(width, height)
-        self._con = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_100)
+        self._ctx = glcheck.gl_context(width, height)
+        self._con = mujoco.MjrContext(model, font_scale(height))
         mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._con)
         self._scene = mujoco.MjvScene(model, maxgeom=2000)
         if fast:
@@ -87,8 +80,9 @@ class Offscreen:
         self._opt = mujoco.MjvOption()
         self._pert = mujoco.MjvPerturb()
 
-    def render(self, data: mujoco.MjData, camera: mujoco.MjvCamera) -> np.ndarray:
-        """(H, W, 3) uint8 image of `data` after its kinematics (the hands' state is their qpos)."""
+    def render(self, data: mujoco.MjData, camera: mujoco.MjvCamera, caption: str | None = None) -> np.ndarray:
+        """(H, W, 3) uint8 image of `data` after its kinematics (the hands' state is their qpos), with `caption`
+        (lines of text) in the top left corner."""
         m = self.model
         self._ctx.make_current()
         mujoco.mj_kinematics(m, data)
@@ -96,6 +90,9 @@ class Offscreen:
         mujoco.mjv_updateScene(m, data, self._opt, self._pert, camera, mujoco.mjtCatBit.mjCAT_ALL, self._scene)
         rect = mujoco.MjrRect(0, 0, self.width, self.height)
         mujoco.mjr_render(rect, self._scene, self._con)
+        if caption:
+            mujoco.mjr_overlay(mujoco.mjtFont.mjFONT_NORMAL, mujoco.mjtGridPos.mjGRID_TOPLEFT, rect, caption, "",
+                               self._con)
         rgb = np.empty((self.height, self.width, 3), np.uint8)
         mujoco.mjr_readPixels(rgb, None, rect, self._con)
         return np.flipud(rgb)
@@ -123,12 +120,9 @@ class MotionRenderer:
 
     def __init__(self, motion: Motion, width: int = 480, height: int = 360, camera: str = "hand",
                  mirror: bool = False):
-        from dexguitar.motion import kinematics as K
         self.motion = motion
-        self.model = S.build_spec(motion.hand, mirror=mirror, visual=True).compile()
+        self.model = stage.stage_model(motion.hand, mirror=mirror)
         m = self.model
-        m.vis.headlight.ambient[:] = 0.35
-        m.vis.headlight.diffuse[:] = 0.6
         self.width, self.height = width, height
         self.data = mujoco.MjData(m)
         mujoco.mj_resetDataKeyframe(m, self.data, 0)

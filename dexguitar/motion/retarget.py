@@ -43,10 +43,16 @@ import functools
 import time
 from pathlib import Path
 
+import jax
+import jax.numpy as jnp
+import mujoco
 import numpy as np
 
+from dexguitar.errors import InputError, UserError
+from dexguitar.motion.format import Motion, clip_to_ranges, resample, save
 from dexguitar.world import guitar as G
 from dexguitar.world import hands as H
+from dexguitar.world import scene as S
 
 CAPTURE_FPS = 120.0
 DUPLICATE_TOL = 0.004                  # two markers of one hand this close (m) in a frame: a labelling glitch
@@ -55,8 +61,12 @@ GUITAR_MARKERS = ("Marker1", "Marker2", "Marker3", "Marker4")
 SIDES = {"left": "L", "right": "R"}
 
 
-class RetargetError(ValueError):
+class RetargetError(UserError, ValueError):
     """A marker file or request that cannot be retargeted; the message names the file (and line / column)."""
+
+
+class MarkerFileError(InputError, RetargetError):
+    """A malformed marker CSV: the message names the file, the line and the column."""
 
 
 # ----------------------------------------------------------------------------------------------------- CSV
@@ -97,58 +107,79 @@ _NAN_WORDS = {"nan", "-nan", "+nan", "", "na", "n/a"}
 def read_markers(path: str | Path, *, unit: float = 0.001) -> MarkerData:
     """Read a marker CSV (header `NAME-X,NAME-Y,NAME-Z,...`, one row per frame, values in mm, `nan` or an empty
     field for an occluded marker). The four guitar markers are required; hand markers may be absent (Pick1 has
-    none of the left hand). Raises `RetargetError` naming the file, line and column of anything malformed."""
+    none of the left hand). Raises `MarkerFileError` naming the file, line and column of anything malformed."""
     path = Path(path)
-    if not path.exists():
-        raise RetargetError(f"{path}: no such file")
-    with open(path, newline="") as f:
-        header = f.readline()
+
+    def text(raw: bytes, line_no: int) -> str:
+        try:
+            return raw.decode("utf-8-sig" if line_no == 1 else "utf-8")
+        except UnicodeDecodeError as e:
+            raise MarkerFileError(path, f"line {line_no}, column {e.start + 1}",
+                                  "not UTF-8 text: expected a CSV of marker positions (is this a binary file?)"
+                                  ) from None
+
+    try:
+        f = open(path, "rb")
+    except FileNotFoundError:
+        raise MarkerFileError(path, None, "no such file") from None
+    except OSError as e:
+        raise MarkerFileError(path, None, f"cannot read the file: {e.strerror or e}") from None
+    with f:
+        header = text(f.readline(), 1)
         if not header.strip():
-            raise RetargetError(f"{path}: empty file (expected a header row of marker columns NAME-X,NAME-Y,NAME-Z)")
-        cols = [c.strip() for c in header.strip().lstrip("\ufeff").split(",")]
+            raise MarkerFileError(path, None, "empty file (expected a header row of marker columns NAME-X,NAME-Y,"
+                                              "NAME-Z)")
+        cols = [c.strip() for c in header.strip().split(",")]
         if len(cols) % 3:
-            raise RetargetError(f"{path}: line 1: {len(cols)} columns, expected X, Y, Z for every marker "
-                                f"(a multiple of 3)")
+            raise MarkerFileError(path, "line 1", f"{len(cols)} columns, expected X, Y, Z for every marker "
+                                                  f"(a multiple of 3)")
         names = []
         for i in range(0, len(cols), 3):
             base = cols[i][:-2]
             for j, axis in enumerate("XYZ"):
                 c = cols[i + j]
                 if c[-2:].upper() != f"-{axis}" or c[:-2] != base or not base:
-                    raise RetargetError(f"{path}: line 1, column {i + j + 1}: {c!r}; expected {base or 'NAME'}-{axis} "
-                                        f"(columns come as NAME-X, NAME-Y, NAME-Z)")
+                    raise MarkerFileError(path, f"line 1, column {i + j + 1}",
+                                          f"{c!r}; expected {base or 'NAME'}-{axis} (columns come as NAME-X, NAME-Y, "
+                                          f"NAME-Z)")
             if base in names:
-                raise RetargetError(f"{path}: line 1: marker {base!r} appears twice")
+                raise MarkerFileError(path, "line 1", f"marker {base!r} appears twice")
             names.append(base)
         missing = [m for m in GUITAR_MARKERS if m not in names]
         if missing:
-            raise RetargetError(f"{path}: line 1: no column for the guitar marker(s) {', '.join(missing)} "
-                                f"(needed to place the guitar)")
+            raise MarkerFileError(path, "line 1", f"no column for the guitar marker(s) {', '.join(missing)} "
+                                                  f"(needed to place the guitar)")
         rows = []
-        for line_no, line in enumerate(f, start=2):
+        for line_no, raw in enumerate(f, start=2):
+            line = text(raw, line_no)
             if not line.strip():
                 continue
             fields = line.rstrip("\r\n").split(",")
             if len(fields) != len(cols):
-                raise RetargetError(f"{path}: line {line_no}: {len(fields)} fields, expected {len(cols)} "
-                                    f"(one per header column)")
+                raise MarkerFileError(path, f"line {line_no}", f"{len(fields)} fields, expected {len(cols)} (one per "
+                                                               f"header column)")
             try:
                 rows.append([float("nan") if v.strip().lower() in _NAN_WORDS else float(v) for v in fields])
             except ValueError:
-                for k, v in enumerate(fields):
-                    try:
-                        float("nan") if v.strip().lower() in _NAN_WORDS else float(v)
-                    except ValueError:
-                        raise RetargetError(f"{path}: line {line_no}, column {k + 1} ({cols[k]}): {v.strip()!r} "
-                                            f"is not a number (use nan for a missing marker)") from None
-                raise
+                k = next(k for k, v in enumerate(fields) if not _is_number(v))
+                raise MarkerFileError(path, f"line {line_no}, column {k + 1} ({cols[k]})",
+                                      f"{fields[k].strip()!r} is not a number (use nan for a missing marker)"
+                                      ) from None
     if not rows:
-        raise RetargetError(f"{path}: no frames after the header")
+        raise MarkerFileError(path, None, "no frames after the header")
     xyz = np.asarray(rows, dtype=np.float64).reshape(len(rows), len(names), 3) * unit
     if np.isinf(xyz).any():
         t, k, a = np.argwhere(np.isinf(xyz))[0]
-        raise RetargetError(f"{path}: line {t + 2}, column {3 * k + a + 1} ({names[k]}-{'XYZ'[a]}): infinite value")
+        raise MarkerFileError(path, f"line {t + 2}, column {3 * k + a + 1} ({names[k]}-{'XYZ'[a]})", "infinite value")
     return MarkerData(str(path), tuple(names), xyz)
+
+
+def _is_number(field: str) -> bool:
+    try:
+        float(field)
+    except ValueError:
+        return field.strip().lower() in _NAN_WORDS
+    return True
 
 
 # ----------------------------------------------------------------------------------------------------- guitar
@@ -369,9 +400,6 @@ class HandChain:
 @functools.lru_cache(maxsize=4)
 def hand_chain(side: str) -> HandChain:
     """Read the chain of `side`'s hand model from `scene.build_model(side)` (its own fretting/picking scene)."""
-    import mujoco
-
-    from dexguitar.world import scene as S
     model = S.build_model(side)
     hand = S.hand_index(model, side)
     bodies = list(hand.key_bodies)
@@ -421,7 +449,6 @@ def _fk(structure, body_pos, body_rot, q):
     """Link positions (16, 3) and rotations (16, 3, 3) in the guitar frame for joint values q (27,), as MuJoCo's
     mj_kinematics composes them: each link = parent * body offset, then its joints in order (slides along, hinges
     about, the link's current axes). Also every dof's world axis and anchor (27, 3) for the Jacobian."""
-    import jax.numpy as jnp
     parents, joints = structure
     pos, rot = [], []
     axes, anchors = [None] * len(q), [None] * len(q)
@@ -450,7 +477,6 @@ def _markers_fk(structure, body_pos, body_rot, marker_link, offsets, q):
 def _markers_jac(structure, body_pos, body_rot, marker_link, offsets, depends, slide, q):
     """Model markers (19, 3) and their Jacobian (19, 3, 27), analytically: a slide moves a dependent marker along
     its axis, a hinge about its axis through its anchor (axis x (marker - anchor))."""
-    import jax.numpy as jnp
     pos, rot, axes, anchors = _fk(structure, body_pos, body_rot, q)
     x = pos[marker_link] + (rot[marker_link] @ offsets[:, :, None])[..., 0]
     lever = jnp.cross(axes[None, :, :], x[:, None, :] - anchors[None, :, :])        # (19, 27, 3)
@@ -464,13 +490,11 @@ def _structure(chain: HandChain):
 
 @functools.lru_cache(maxsize=8)
 def _fk_batch(structure):
-    import jax
     return jax.jit(jax.vmap(functools.partial(_fk, structure), in_axes=(None, None, 0)))
 
 
 def link_poses(chain: HandChain, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(T, 16, 3) link positions and (T, 16, 3, 3) rotations in the guitar frame for (T, 27) joint values."""
-    import jax.numpy as jnp
     pos, rot = _fk_batch(_structure(chain))(jnp.asarray(chain.body_pos, jnp.float32),
                                              jnp.asarray(chain.body_rot, jnp.float32),
                                              jnp.asarray(qpos, jnp.float32))[:2]
@@ -529,8 +553,6 @@ def _spd_solve(a, b):
     """x = a^-1 b for a symmetric positive definite (n, n) by Gaussian elimination without pivoting (stable for
     SPD), in plain jnp ops. Why not jnp.linalg.solve: its batched LAPACK LU on the XLA CPU thread pool deadlocks
     intermittently (jaxlib 0.10, vmapped inside a loop, large batches)."""
-    import jax
-    import jax.numpy as jnp
     n = a.shape[-1]
     rows = jnp.arange(n)
 
@@ -562,8 +584,6 @@ def _coupling(cfg: IKConfig) -> np.ndarray:
 @functools.lru_cache(maxsize=8)
 def _solver(structure):
     """A jitted red-black Levenberg-Marquardt on all frames: `sweeps` x (even frames, then odd frames)."""
-    import jax
-    import jax.numpy as jnp
 
     def frame_step(q, mu, x, m, qp, qn, hp, hn, qref, consts, lo, hi):
         body_pos, body_rot, marker_link, offsets, wsq, s2, p2, depends, slide, lin = consts
@@ -623,7 +643,6 @@ def solve_ik(chain: HandChain, targets: np.ndarray, q_init: np.ndarray, offsets:
     frame's 27 joints with its neighbours held fixed, even frames then odd frames (red-black block coordinate
     descent: each half-sweep is exact for its frames, so the total cost never rises), vmapped over frames in JAX;
     joint limits by projection (clip) of every step. Warm start: `q_init` (the previous round's solution)."""
-    import jax.numpy as jnp
     targets = np.asarray(targets, dtype=np.float64)
     mask = (~np.isnan(targets).any(-1)).astype(np.float64)
     if frame_weights is not None:
@@ -664,7 +683,6 @@ def euler_xyz(rot: np.ndarray) -> np.ndarray:
 def initial_pose(chain: HandChain, targets: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     """(T, 27) start poses: the wrist from a Kabsch fit of the palm-link markers (knuckles and wrist markers; the
     nearest frame with three of them where fewer are seen), the fingers from the home pose."""
-    from dexguitar.world import scene as S
     t = len(targets)
     q = np.tile(S.HOME[chain.side], (t, 1)).astype(np.float64)
     palm = np.array(PALM_MARKERS)
@@ -801,7 +819,6 @@ def retarget(markers: MarkerData, hands=("left", "right"), reg: Registration = R
 
 def to_motion(fit: HandFit, fps: float = CAPTURE_FPS, name: str = ""):
     """The fit as our `Motion` (joints clipped into range: the float32 solve can sit a hair outside)."""
-    from dexguitar.motion.format import Motion, clip_to_ranges
     q, _ = clip_to_ranges(fit.qpos, fit.side)
     return Motion(fit.side, fps, q, name)
 
@@ -834,7 +851,6 @@ def retarget_file(csv: str | Path, out: str | Path, hand: str = "both", *, start
                   log=None) -> tuple[dict[str, Path], dict]:
     """The `motion retarget` command: read, register, retarget `hand` ("left", "right" or "both": every hand the
     file has markers of), save one motion per hand (`output_paths`), return (paths, `report`)."""
-    from dexguitar.motion.format import resample, save
     if hand not in ("left", "right", "both"):
         raise RetargetError(f"--hand must be left, right or both, got {hand!r}")
     markers = read_markers(csv)

@@ -17,14 +17,19 @@ What is read, and how:
   (slides win over hammer marks). A rest in between cancels a pending legato.
 
 Errors (unreadable file, no suitable track, fret > 22, ...) raise `SongError` with the file and
-"track T, measure M, beat B" (T 0-based like the `track` option, M and B 1-based as Guitar Pro shows them).
+"track T, measure M, beat B" (T 0-based like the `track` option, M and B 1-based as Guitar Pro shows them), or
+"byte N" where the file cannot be decoded. Files larger than `song.MAX_FILE_BYTES` are refused unread, and the song
+must keep the limits of `timing` (those errors name "track T, note I", I counting every beat read, 0-based).
 """
 from __future__ import annotations
 
+import io
+import struct
 from fractions import Fraction
 from pathlib import Path
 
-from dexguitar.music.song import MUTE, Effect, Note, Song, SongError
+from dexguitar.music.song import MUTE, Effect, Note, Song, SongError, read_bytes
+from dexguitar.music.timing import validate
 from dexguitar.world.guitar import N_FRETS, N_STRINGS, OPEN_MIDI
 
 _WHOLE_TICKS = 3840  # PyGuitarPro: a quarter note is 960 ticks
@@ -80,10 +85,17 @@ def read_guitarpro(path: str | Path, *, track: int | None = None) -> Song:
     import guitarpro
 
     path = Path(path)
+    data = read_bytes(path)
+    if not data:
+        raise SongError(path, None, "cannot read as Guitar Pro 3/4/5: the file is empty")
+    stream = io.BytesIO(data)
     try:
-        gp_song = guitarpro.parse(str(path))
-    except Exception as e:  # PyGuitarPro raises many kinds on bad input (struct.error, GPException, ...)
-        raise SongError(path, None, f"cannot read as Guitar Pro 3/4/5: {type(e).__name__}: {e}") from None
+        gp_song = guitarpro.parse(stream)
+    except Exception as e:  # PyGuitarPro raises many kinds on bad input, some wrapped in a GPException
+        if isinstance(e, struct.error) or isinstance(e.__cause__, struct.error):   # it read past the end
+            raise SongError(path, f"byte {len(data)}", "cannot read as Guitar Pro 3/4/5: the file ends in the middle "
+                                                       "of the song data (truncated?)") from None
+        raise SongError(path, f"byte {stream.tell()}", f"cannot read as Guitar Pro 3/4/5: {e}") from None
     t_index, gp_track = _pick_track(gp_song, path, track)
     capo = int(gp_track.offset or 0)
 
@@ -105,6 +117,8 @@ def read_guitarpro(path: str | Path, *, track: int | None = None) -> Song:
                 duration = beat_duration(beat.duration)
             except (ZeroDivisionError, TypeError, AttributeError) as e:
                 raise SongError(path, where, f"bad duration: {e}") from None
+            if duration <= 0:
+                raise SongError(path, where, f"bad duration {duration} (a tuplet with a negative count?)")
             frets = [MUTE] * N_STRINGS
             effects = [Effect.NONE] * N_STRINGS
             origins: dict[int, tuple[str, int]] = {}
@@ -151,6 +165,7 @@ def read_guitarpro(path: str | Path, *, track: int | None = None) -> Song:
         raise SongError(path, f"track {t_index}", f"'{gp_track.name}' has no beats")
     title = gp_song.title.strip() if gp_song.title else ""
     try:
-        return Song(tempo=gp_song.tempo, notes=tuple(notes), title=title or path.stem)
+        song = Song(tempo=gp_song.tempo, notes=tuple(notes), title=title or path.stem)
     except ValueError as e:
         raise SongError(path, None, str(e)) from None
+    return validate(song, path, f"track {t_index}")

@@ -10,7 +10,9 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
+from dexguitar.music.readers import READERS, read_tab
 from dexguitar.music.song import Song, SongError
+from dexguitar.music.tab_ascii import read_ascii_tab
 
 SONGS_DIR = Path(__file__).resolve().with_name("songs")
 
@@ -29,18 +31,42 @@ def path(name: str) -> Path:
 
 @functools.lru_cache(maxsize=None)
 def _load(name: str) -> Song:
-    from dexguitar.music.tab_ascii import read_ascii_tab
-
     return read_ascii_tab(path(name))
+
+
+def load_song(source: str | Path, **options) -> Song:
+    """A tab file of any supported format (the reader is chosen by the suffix), or an embedded song by name."""
+    source = Path(source)
+    if not source.exists():
+        if str(source) in names():
+            return load(str(source), **options)
+        raise SongError(source, None, "no such file (and no embedded song of that name)")
+    return read_tab(source, **options)
+
+
+def load_songs(sources) -> list[Song]:
+    """The songs of every source, in order, so that one argument list can name a whole collection. A source is a tab
+    file, an embedded song name or a folder: all the files in it that `READERS` can read, sorted by name."""
+    songs = []
+    for source in sources:
+        p = Path(source)
+        if p.is_dir():
+            files = sorted(f for f in p.iterdir() if f.is_file() and f.suffix.lower() in READERS)
+            if not files:
+                raise SongError(p, None, f"no tab files ({', '.join(READERS)}) in this folder")
+            songs += [load_song(f) for f in files]
+        elif p.is_file() or str(source) in names():
+            songs.append(load_song(p))
+        else:
+            raise SongError(p, None, "no such file, folder or embedded song")
+    return songs
 
 
 def load(name: str, **options) -> Song:
     """Parse an embedded song; `options` (tempo, grid, title) are passed to `read_ascii_tab`."""
     if options:
-        from dexguitar.music.tab_ascii import read_ascii_tab
-
         return read_ascii_tab(path(name), **options)
     return _load(name)
 
 
-__all__ = ["SONGS_DIR", "names", "path", "load"]
+__all__ = ["SONGS_DIR", "names", "path", "load", "load_song", "load_songs"]

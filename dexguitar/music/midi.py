@@ -15,16 +15,20 @@
 * Strings and frets come from `dexguitar.music.fingering.assign_positions` (minimal hand travel).
 
 Errors (not a MIDI file, no notes, a pitch or chord the guitar cannot play) raise `SongError` with the file and
-the position ("tick T, bar B"; bars counted from 1 using the file's time signatures, 4/4 by default).
+the position ("tick T, bar B"; bars counted from 1 using the file's time signatures, 4/4 by default; "byte N" where
+the file cannot be decoded). Files larger than `song.MAX_FILE_BYTES` are refused unread, and the song must keep the
+limits of `timing` (checked before the fingering search, which is the slow part).
 """
 from __future__ import annotations
 
+import io
 import math
 from fractions import Fraction
 from pathlib import Path
 
 from dexguitar.music.fingering import FingeringError, assign_positions
-from dexguitar.music.song import MUTE, Note, Song, SongError
+from dexguitar.music.song import MUTE, Note, Song, SongError, read_bytes
+from dexguitar.music.timing import check_tempo, check_timing
 from dexguitar.world.guitar import N_STRINGS
 
 DRUM_CHANNEL = 9  # MIDI channel 10, numbered from 0 as mido does
@@ -79,10 +83,18 @@ def read_midi(path: str | Path, *, track: int | None = None, grid: str = "1/16",
         raise SongError(path, None, str(e)) from None
     if tempo is not None and not (isinstance(tempo, (int, float)) and math.isfinite(tempo) and tempo > 0):
         raise SongError(path, None, f"tempo must be a positive number, got {tempo!r}")
+    data = read_bytes(path)
+    if not data:
+        raise SongError(path, None, "cannot read as a MIDI file: the file is empty")
+    stream = io.BytesIO(data)
     try:
-        mid = mido.MidiFile(str(path))
-    except Exception as e:  # mido raises OSError, EOFError, KeyError, ValueError ... on bad input
-        raise SongError(path, None, f"cannot read as a MIDI file: {type(e).__name__}: {e}") from None
+        mid = mido.MidiFile(file=stream)
+    except EOFError:
+        raise SongError(path, f"byte {len(data)}", "cannot read as a MIDI file: it ends in the middle of the MIDI "
+                                                   "data (truncated?)") from None
+    except Exception as e:  # mido raises OSError, KeyError, ValueError ... on bad input
+        raise SongError(path, f"byte {stream.tell()}", f"cannot read as a MIDI file: {type(e).__name__}: {e}"
+                        ) from None
     tpb = mid.ticks_per_beat
     if not isinstance(tpb, int) or tpb <= 0:
         raise SongError(path, None, f"unsupported time division (ticks per beat {tpb!r})")
@@ -102,7 +114,7 @@ def read_midi(path: str | Path, *, track: int | None = None, grid: str = "1/16",
             if msg.type == "set_tempo":
                 if first_tempo is None or tick < first_tempo[0]:
                     first_tempo = (tick, msg.tempo)
-            elif msg.type == "time_signature":
+            elif msg.type == "time_signature" and msg.numerator > 0:   # a 0/x bar would have no length
                 signatures.append((tick, msg.numerator, msg.denominator))
             elif not selected or msg.type not in ("note_on", "note_off") or msg.channel == DRUM_CHANNEL:
                 continue
@@ -118,8 +130,18 @@ def read_midi(path: str | Path, *, track: int | None = None, grid: str = "1/16",
         where = f"track {track}" if track is not None else None
         raise SongError(path, where, "no notes (drum channel 10 is ignored)")
 
-    bpm = float(tempo) if tempo is not None else (
-        mido.tempo2bpm(first_tempo[1]) if first_tempo is not None else DEFAULT_TEMPO)
+    bars = _Bars(tpb, signatures)
+    if tempo is not None:
+        bpm, tempo_at = float(tempo), None
+    elif first_tempo is not None:
+        bpm = mido.tempo2bpm(max(first_tempo[1], 1))                  # 0 us per beat: refused just below
+        tempo_at = f"tick {first_tempo[0]}, bar {bars.bar(first_tempo[0])}"
+    else:
+        bpm, tempo_at = DEFAULT_TEMPO, None
+    try:
+        check_tempo(bpm)
+    except ValueError as e:
+        raise SongError(path, tempo_at, str(e) if tempo is None else f"tempo option: {e}") from None
     step_ticks = step * 4 * tpb
 
     def snap(tick: int) -> int:
@@ -132,23 +154,21 @@ def read_midi(path: str | Path, *, track: int | None = None, grid: str = "1/16",
         c["pitches"].add(pitch)
         c["end"] = max(c["end"], snap(end), q + 1)
     onsets = sorted(chords)
+    plan = []  # (duration in grid steps, index into `onsets` of the chord, or None for a rest)
+    for k, q in enumerate(onsets):
+        end = chords[q]["end"]
+        nxt = onsets[k + 1] if k + 1 < len(onsets) else None
+        if nxt is not None and nxt - end > 1:
+            plan += [(end - q, k), (nxt - end, None)]
+        else:
+            plan.append(((end if nxt is None else nxt) - q, k))
+    check_timing(bpm, [d * step for d, _ in plan], path)
 
-    bars = _Bars(tpb, signatures)
     try:
         frets = assign_positions([sorted(chords[q]["pitches"]) for q in onsets])
     except FingeringError as e:
         tick = chords[onsets[e.index]]["tick"]
         raise SongError(path, f"tick {tick}, bar {bars.bar(tick)}", str(e)) from None
 
-    out: list[Note] = []
-    for k, q in enumerate(onsets):
-        end = chords[q]["end"]
-        nxt = onsets[k + 1] if k + 1 < len(onsets) else None
-        if nxt is None:
-            out.append(Note((end - q) * step, frets[k]))
-        elif nxt - end > 1:
-            out.append(Note((end - q) * step, frets[k]))
-            out.append(Note((nxt - end) * step, (MUTE,) * N_STRINGS))
-        else:
-            out.append(Note((nxt - q) * step, frets[k]))
+    out = [Note(d * step, frets[k] if k is not None else (MUTE,) * N_STRINGS) for d, k in plan]
     return Song(tempo=bpm, notes=tuple(out), title=path.stem)

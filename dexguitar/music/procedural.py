@@ -3,14 +3,20 @@
 The paper trained its general left-hand policy on 500 song tracks it could not publish and its right hand on
 procedural picking patterns. Here both come from a seed: `left_exercises` writes scales, arpeggios, chord
 progressions and long jumps over a documented chord-shape vocabulary (`CHORD_SHAPES`), drawn so that every shape
-visits the whole neck; `right_patterns` writes picking/strumming patterns balanced over the 21 contiguous string
-sets. Both return ordinary `Song`s; the RL env turns them into timelines and samples windows from them.
-`coverage` summarises how balanced a list of songs is.
+visits the whole neck; `left_general` is the general left hand's material: every voicing of 17 chord qualities
+that one hand holds in a 4-fret box (`chord_voicings`), drawn balanced over families and neck regions and played
+as strums, fingerpicking, let-ring arpeggios, arpeggios with chord hints, double stops and pedal points, plus
+two-/three-voice writing and scale lines in positions from the open one to fret 19, and jumps (the paper names
+poor chord coverage as its general policy's weakness; `dexguitar.music.coverage` measures it); `right_patterns`
+writes picking/strumming patterns balanced over the 21 contiguous string sets. All return ordinary `Song`s; the
+RL env turns them into timelines and samples windows from them. `coverage` summarises how balanced a list of
+songs is.
 
 Conventions (as in `song.py`): index 0 = string 1 = high E, MUTE = -1, OPEN = 0, frets 1..22.
 Playability of everything produced here: pressed frets (>= 1) of a note, and of its chord hint, lie within a
-4-fret span (max - min <= 3) with at most 4 distinct frets, and every sounding string of an arpeggio note is in
-its chord hint at the same fret.
+4-fret span (max - min <= 3) with at most 4 distinct frets (`left_general`: at most 4 fingers as the left-hand
+reward counts them, `finger_groups`), and every sounding string of an arpeggio note is in its chord hint at the
+same fret.
 
 Determinism: one `numpy.random.default_rng(seed)` is consumed song after song, so the first k songs of a call with
 n_songs >= k are the same for the same seed.
@@ -18,12 +24,15 @@ n_songs >= k are the same for the same seed.
 from __future__ import annotations
 
 import dataclasses
+import functools
+import itertools
 from fractions import Fraction
 from typing import Iterable, Sequence
 
 import numpy as np
 
-from dexguitar.music.song import MUTE, OPEN, Note, Song
+from dexguitar.errors import UserError
+from dexguitar.music.song import MUTE, OPEN, Effect, Note, Song
 from dexguitar.world.guitar import N_FRETS, N_STRINGS, OPEN_MIDI
 
 MAX_SPAN = 3           # max - min of the pressed frets of one hand shape (four consecutive frets)
@@ -225,13 +234,19 @@ SCALES = {
     "minor pentatonic": (0, 3, 5, 7, 10),
     "chromatic": tuple(range(12)),
 }
+LINE_SCALES = SCALES | {  # `left_general` also plays these (`left_exercises` keeps drawing from SCALES)
+    "natural minor": (0, 2, 3, 5, 7, 8, 10),
+    "harmonic minor": (0, 2, 3, 5, 7, 8, 11),
+    "major pentatonic": (0, 2, 4, 7, 9),
+}
 
 
 def scale_box(start: int, root: int, scale: str) -> list[tuple[int, int]]:
     """(string, fret) of the scale notes inside the 4-fret box start..start+3, by ascending pitch.
 
-    A 4-fret box over six strings never holds one pitch twice (neighbouring strings are 4-5 semitones apart)."""
-    pcs = set(SCALES[scale])
+    A 4-fret box over six strings never holds one pitch twice (neighbouring strings are 4-5 semitones apart).
+    start 0 is the open position: open strings and frets 1..3."""
+    pcs = set(LINE_SCALES[scale])
     notes = [(s, f) for s in range(1, N_STRINGS + 1) for f in range(start, start + MAX_SPAN + 1)
              if (OPEN_MIDI[s - 1] + f - root) % 12 in pcs]
     return sorted(notes, key=lambda sf: OPEN_MIDI[sf[0] - 1] + sf[1])
@@ -245,7 +260,7 @@ def scale_run(start: int, root: int, scale: str) -> list[tuple[int, int]]:
     box = scale_box(start, root, scale)
     if scale == "chromatic":
         return box
-    pcs = SCALES[scale]
+    pcs = LINE_SCALES[scale]
     pitch = [OPEN_MIDI[s - 1] + f for s, f in box]
 
     def next_degree(p):
@@ -353,6 +368,345 @@ def left_exercises(seed: int, n_songs: int, notes_per_song: int = 40, tempo_rang
         tempo = _tempo(rng, tempo_range)
         notes, label = LEFT_KINDS[kind][0](rng, notes_per_song)
         songs.append(Song(tempo, _sprinkle(rng, notes, notes_per_song), f"left-exercise-{i} ({label})"))
+    return songs
+
+
+# --------------------------------------------------------------------------------------------------------------
+# Left hand, general material: a chord vocabulary derived from harmony, played in every texture
+# --------------------------------------------------------------------------------------------------------------
+
+QUALITIES = {  # chord symbol suffix -> semitones above the root: the common qualities of tonal and popular music
+    "5": (0, 7), "": (0, 4, 7), "m": (0, 3, 7), "sus2": (0, 2, 7), "sus4": (0, 5, 7), "dim": (0, 3, 6),
+    "aug": (0, 4, 8), "6": (0, 4, 7, 9), "m6": (0, 3, 7, 9), "7": (0, 4, 7, 10), "maj7": (0, 4, 7, 11),
+    "m7": (0, 3, 7, 10), "m7b5": (0, 3, 6, 10), "dim7": (0, 3, 6, 9), "7sus4": (0, 5, 7, 10),
+    "add9": (0, 2, 4, 7), "madd9": (0, 2, 3, 7),
+}
+FIFTH = 7                    # the tone guitarists leave out of four-tone chords
+MIN_VOICING_STRINGS = 3      # two-string shapes come as parts of voicings (double stops, pinches)
+OPEN_POSITION = 4            # first position: open strings with frets 1..4 (one finger per fret)
+FAMILIES = ("power", "open position", "open strings higher up", "3 strings", "4 strings", "5-6 strings")
+
+
+@dataclasses.dataclass(frozen=True)
+class Voicing:
+    """One way to hold a chord: absolute frets high E -> low E (MUTE, OPEN or fret), root pitch class, quality."""
+
+    frets: tuple[int, ...]
+    root: int
+    quality: str
+
+    @property
+    def name(self) -> str:
+        """Chord symbol, e.g. "Am7"."""
+        return _NOTE_NAMES[self.root] + self.quality
+
+    @property
+    def strings(self) -> tuple[int, ...]:
+        """Sounding strings (1-based), high to low."""
+        return tuple(i + 1 for i, f in enumerate(self.frets) if f != MUTE)
+
+    @property
+    def position(self) -> int:
+        return min(f for f in self.frets if f > 0)
+
+    @property
+    def family(self) -> str:
+        """The classes draws are balanced over (`FAMILIES`): power chords; voicings with open strings in the
+        first position or higher up; voicings without, by number of strings (triads on string sets ... barres)."""
+        if self.quality == "5":
+            return "power"
+        if OPEN in self.frets:
+            return "open position" if self.position <= OPEN_POSITION else "open strings higher up"
+        return {3: "3 strings", 4: "4 strings"}.get(len(self.strings), "5-6 strings")
+
+
+def finger_groups(frets: Sequence[int]) -> int:
+    """Fingers a shape needs, as the left-hand reward counts them (`envs.rewards.finger_order`): strings pressed
+    at one fret share a finger (a barre) unless a string between them is open or pressed at a lower fret."""
+    n = 0
+    for a, fa in enumerate(frets):
+        if fa <= 0:
+            continue
+        shared = any(frets[b] == fa and not any(frets[m] == OPEN or 0 < frets[m] < fa for m in range(a + 1, b))
+                     for b in range(a + 1, N_STRINGS))
+        n += not shared
+    return n
+
+
+def _voicings_in_box(box: int, root: int, quality: str) -> Iterable[tuple[int, ...]]:
+    """Voicings of one chord that a hand holds in frets box..box+3, open strings allowed.
+
+    Rules of common practice: the sounding strings are neighbours (>= 3 of them); every chord tone sounds (the
+    fifth may be left out of four-tone chords); any chord tone may be the bass (inversions, slash chords such as
+    C/G or G/B); at least one string is pressed. (`chord_voicings` keeps those that need at most 4 fingers.)"""
+    steps = QUALITIES[quality]
+    tones = {(root + t) % 12 for t in steps}
+    needed = tones - {(root + FIFTH) % 12} if len(steps) >= 4 else tones
+    options = [[f for f in (OPEN, *range(box, box + MAX_SPAN + 1)) if (OPEN_MIDI[s] + f) % 12 in tones]
+               for s in range(N_STRINGS)]
+    for top in range(N_STRINGS):                                      # index of the highest sounding string
+        for bass in range(top + MIN_VOICING_STRINGS - 1, N_STRINGS):  # ... and of the lowest
+            for part in itertools.product(*options[top:bass + 1]):
+                if max(part) == OPEN:
+                    continue
+                if not needed <= {(OPEN_MIDI[top + k] + f) % 12 for k, f in enumerate(part)}:
+                    continue
+                yield (MUTE,) * top + part + (MUTE,) * (N_STRINGS - 1 - bass)
+
+
+@functools.lru_cache(maxsize=None)
+def chord_voicings() -> tuple[Voicing, ...]:
+    """Every voicing (`_voicings_in_box`) of every chord (12 roots x `QUALITIES`) in every 4-fret box of the neck
+    that needs at most 4 fingers (`finger_groups`): about 41,000.
+
+    A shape that spells several chords is named after the first quality of `QUALITIES` that spells it, then the
+    lowest root (A C E is Am, not C6 without its fifth)."""
+    seen: dict[tuple[int, ...], Voicing] = {}
+    for quality in QUALITIES:
+        for root in range(12):
+            for box in range(1, N_FRETS - MAX_SPAN + 1):
+                for frets in _voicings_in_box(box, root, quality):
+                    if frets not in seen and finger_groups(frets) <= MAX_DISTINCT_FRETS:
+                        seen[frets] = Voicing(frets, root, quality)
+    return tuple(seen.values())
+
+
+@functools.lru_cache(maxsize=None)
+def _voicing_index() -> dict[int, dict[tuple[str, int], tuple[Voicing, ...]]]:
+    """Voicings by position, then (family, bass string), so that draws can be balanced and constrained cheaply."""
+    index: dict[int, dict[tuple[str, int], list[Voicing]]] = {}
+    for v in chord_voicings():
+        index.setdefault(v.position, {}).setdefault((v.family, v.strings[-1]), []).append(v)
+    return {p: {k: tuple(v) for k, v in groups.items()} for p, groups in index.items()}
+
+
+P_NEAR = 0.5     # chance that the next chord stays within NEAR frets of the last (progressions mostly move little)
+NEAR = 2
+FAR = 5          # a jump moves the hand at least this many frets
+
+
+def draw_voicing(rng, prev: int | None = None, far: bool = False, below: int = N_STRINGS + 1) -> Voicing:
+    """A voicing balanced over neck buckets and `FAMILIES`: bucket uniform (or, after a chord at position `prev`,
+    with chance P_NEAR a position within NEAR frets, or with far=True at least FAR frets away), then a family
+    found there uniform, then uniform. below: every sounding string must be higher than this one (pedal tones)."""
+    index = _voicing_index()
+    if far:
+        positions = [p for p in range(1, N_FRETS + 1) if abs(p - prev) >= FAR]
+    elif prev is not None and rng.random() < P_NEAR:
+        positions = [p for p in range(1, N_FRETS + 1) if abs(p - prev) <= NEAR]
+    else:
+        lo, hi = _pick(rng, BUCKETS)
+        positions = range(lo, hi + 1)
+    groups: dict[str, list[tuple[Voicing, ...]]] = {}
+    for p in positions:
+        for (family, bass), voicings in index.get(p, {}).items():
+            if bass < below:
+                groups.setdefault(family, []).append(voicings)
+    if not groups:  # nothing of that kind near `prev`: start afresh
+        return draw_voicing(rng, below=below)
+    family = groups[_pick(rng, sorted(groups))]
+    return _pick(rng, _pick(rng, family, [len(v) for v in family]))
+
+
+def _part(voicing: Voicing, strings: Iterable[int], extra: dict[int, int] | None = None) -> tuple[int, ...]:
+    """Frets of a note that sounds some strings of a voicing (and `extra` {string: fret})."""
+    keep = set(strings)
+    frets = [f if i + 1 in keep else MUTE for i, f in enumerate(voicing.frets)]
+    for s, f in (extra or {}).items():
+        frets[s - 1] = f
+    return tuple(frets)
+
+
+UNITS = (F(1, 8), F(1, 12), F(1, 16), F(1, 24), F(1, 32))  # the shortest note of a song
+SHORTEST_FRAMES = (5, 15)   # shortest note of the official songs, in frames (reference §11)
+TEMPO_RANGE = (50, 225)     # their tempos
+FRAMES_PER_WHOLE_AT_1_BPM = 4 * 60 * 60  # a whole note is 4 beats; 60 s per minute; 60 frames per second
+STEADY_MULTIPLES = (1, 1, 1, 2)         # lines and picked patterns: mostly the unit
+HELD_MULTIPLES = (1, 2, 3, 4, 6, 8)     # strummed chords and jumps
+
+
+def _rhythm(rng) -> tuple[float, Fraction]:
+    """Tempo and shortest note such that the shortest note lasts 5..15 frames (uniform) at 50..225 BPM."""
+    frames = int(rng.integers(SHORTEST_FRAMES[0], SHORTEST_FRAMES[1] + 1))
+    units = [u for u in UNITS if TEMPO_RANGE[0] <= u * FRAMES_PER_WHOLE_AT_1_BPM / frames <= TEMPO_RANGE[1]]
+    unit = _pick(rng, units)
+    return float(round(unit * FRAMES_PER_WHOLE_AT_1_BPM / frames)), unit
+
+
+def _gen_strum(rng, n, unit):
+    """A progression: each voicing strummed 1..4 times, each strum held 1..8 units."""
+    notes, v = [], None
+    while len(notes) < n:
+        v = draw_voicing(rng, v.position if v else None)
+        notes += [Note(unit * _pick(rng, HELD_MULTIPLES), v.frets) for _ in range(int(rng.integers(1, 5)))]
+    return notes, "strum"
+
+
+def _gen_fingerstyle(rng, n, unit):
+    """Fingerpicking a held chord: every note a random part of it (1 string .. all, size uniform): bass notes,
+    pinches of bass and treble, double stops, partial strums."""
+    notes, v = [], None
+    while len(notes) < n:
+        v = draw_voicing(rng, v.position if v else None)
+        for _ in range(int(rng.integers(4, 9))):
+            size = int(rng.integers(1, len(v.strings) + 1))
+            strings = [v.strings[i] for i in rng.choice(len(v.strings), size, replace=False)]
+            notes.append(Note(unit * _pick(rng, STEADY_MULTIPLES), _part(v, strings)))
+    return notes, "fingerstyle"
+
+
+def _gen_arpeggio(rng, n, unit):
+    """A held chord picked string by string, the chord as hint on every note (paper Fig. 13)."""
+    notes, v = [], None
+    while len(notes) < n:
+        v = draw_voicing(rng, v.position if v else None)
+        low_to_high = list(v.strings[::-1])
+        pattern = _pick(rng, ("up", "down", "up-down", "random"))
+        seq = {"up": low_to_high, "down": low_to_high[::-1], "up-down": low_to_high + low_to_high[-2:0:-1],
+               "random": [low_to_high[i] for i in rng.permutation(len(low_to_high))]}[pattern]
+        notes += [Note(unit * _pick(rng, STEADY_MULTIPLES), _part(v, [s]), chord=v.frets) for s in seq]
+    return notes, "arpeggio"
+
+
+def _gen_let_ring(rng, n, unit):
+    """Fingerpicking with the strings left ringing: each note picks one more string of the chord while the ones
+    picked before keep sounding (tied), so the hand holds a growing part of the chord and keeps its open strings
+    free."""
+    notes, v = [], None
+    while len(notes) < n:
+        v = draw_voicing(rng, v.position if v else None)
+        order = [v.strings[i] for i in rng.permutation(len(v.strings))] if rng.random() < 0.5 else v.strings[::-1]
+        for k in range(len(order)):
+            ties = tuple(Effect.TIE if s in order[:k] else Effect.NONE for s in range(1, N_STRINGS + 1))
+            notes.append(Note(unit * _pick(rng, STEADY_MULTIPLES), _part(v, order[:k + 1]), ties))
+    return notes, "let ring"
+
+
+def _gen_double_stops(rng, n, unit):
+    """Two strings of a chord at once (thirds, fourths, sixths, octaves: neighbours or one string apart),
+    2..4 per chord, moving in mostly small steps."""
+    notes, v = [], None
+    while len(notes) < n:
+        v = draw_voicing(rng, v.position if v else None)
+        pairs = [(a, b) for a in v.strings for b in v.strings if 1 <= b - a <= 2]
+        for _ in range(int(rng.integers(2, 5))):
+            notes.append(Note(unit * _pick(rng, STEADY_MULTIPLES), _part(v, _pick(rng, pairs))))
+    return notes, "double stops"
+
+
+def _gen_pedal(rng, n, unit):
+    """A pedal point: an open bass string (6, 5 or 4) under a figure played on the strings above it; each note
+    is the pedal alone, the figure (1..3 strings of a chord), or both."""
+    pedal = int(rng.integers(4, N_STRINGS + 1))
+    notes, v = [], None
+    while len(notes) < n:
+        v = draw_voicing(rng, v.position if v else None, below=pedal)
+        for _ in range(int(rng.integers(3, 7))):
+            size = int(rng.integers(1, min(3, len(v.strings)) + 1))
+            figure = [v.strings[i] for i in rng.choice(len(v.strings), size, replace=False)]
+            what = _pick(rng, ("pedal", "figure", "both"))
+            frets = {"pedal": _single(pedal, OPEN), "figure": _part(v, figure),
+                     "both": _part(v, figure, {pedal: OPEN})}[what]
+            notes.append(Note(unit * _pick(rng, STEADY_MULTIPLES), frets))
+    return notes, f"pedal {pedal}"
+
+
+LINE_STEPS = (-4, -3, -2, -1, 1, 2, 3, 4)   # scale steps of a melody: mostly seconds, some skips
+LINE_STEP_WEIGHTS = (1, 1, 2, 4, 4, 2, 1, 1)
+
+
+def _move_box(rng, start: int) -> int:
+    """The next 4-fret box of a line: with chance P_NEAR 1..NEAR+2 frets away, else anywhere (0 = open position)."""
+    if rng.random() < P_NEAR:
+        return int(np.clip(start + _pick(rng, (-1, 1)) * int(rng.integers(1, NEAR + 3)), 0, N_FRETS - MAX_SPAN))
+    return int(rng.integers(0, N_FRETS - MAX_SPAN + 1))
+
+
+def _gen_line(rng, n, unit):
+    """A single-note melody in a scale: phrases of 4..12 notes, each a run or a walk in a 4-fret box, the box
+    moving between phrases, near (1..NEAR+2 frets) or anywhere from the open position to fret 19."""
+    scale = _pick(rng, list(LINE_SCALES))
+    root = int(rng.integers(12))
+    start = int(rng.integers(0, N_FRETS - MAX_SPAN + 1))
+    notes: list[Note] = []
+    while len(notes) < n:
+        box = scale_box(start, root, scale)
+        length = int(rng.integers(4, 13))
+        if rng.random() < 0.5:
+            first = int(rng.integers(0, max(len(box) - length, 0) + 1))
+            seq = box[first:first + length]
+            seq = seq if rng.random() < 0.5 else seq[::-1]
+        else:
+            i, seq = int(rng.integers(len(box))), []
+            for _ in range(length):
+                seq.append(box[i])
+                i = int(np.clip(i + _pick(rng, LINE_STEPS, LINE_STEP_WEIGHTS), 0, len(box) - 1))
+        notes += [Note(unit * _pick(rng, STEADY_MULTIPLES), _single(s, f)) for s, f in seq]
+        start = _move_box(rng, start)
+    return notes, f"line {_NOTE_NAMES[root]} {scale}"
+
+
+def _gen_voices(rng, n, unit):
+    """Classical two- and three-voice writing in one position: a bass note (strings 4-6) under one or two melody
+    notes (strings 1-3), any tones of one scale in the 4-fret box, not only chord tones (passing notes,
+    suspensions); every third note or so the melody sounds alone. The box moves every 4..8 notes."""
+    scale = _pick(rng, [s for s in LINE_SCALES if s != "chromatic"])
+    root = int(rng.integers(12))
+    start = int(rng.integers(0, N_FRETS - MAX_SPAN + 1))
+    notes: list[Note] = []
+    while len(notes) < n:
+        frets_on = {s: [f for t, f in scale_box(start, root, scale) if t == s] for s in range(1, N_STRINGS + 1)}
+        basses = [s for s in (4, 5, 6) if frets_on[s]]
+        for _ in range(int(rng.integers(4, 9))):
+            strings = [int(s) for s in rng.choice((1, 2, 3), int(rng.integers(1, 3)), replace=False)]
+            if rng.random() < 2 / 3:
+                strings.append(_pick(rng, basses))
+            frets = [MUTE] * N_STRINGS
+            for s in strings:
+                frets[s - 1] = _pick(rng, frets_on[s])
+            notes.append(Note(unit * _pick(rng, STEADY_MULTIPLES), frets))
+        start = _move_box(rng, start)
+    return notes, f"voices {_NOTE_NAMES[root]} {scale}"
+
+
+def _gen_jumps(rng, n, unit):
+    """Chords and single notes, each at least FAR frets from the last: long shifts of the hand."""
+    v = draw_voicing(rng)
+    notes = [Note(unit * _pick(rng, HELD_MULTIPLES), v.frets)]
+    prev = v.position
+    while len(notes) < n:
+        if rng.random() < 0.5:
+            v = draw_voicing(rng, prev, far=True)
+            frets, prev = v.frets, v.position
+        else:
+            prev = _pick(rng, [f for f in range(1, N_FRETS + 1) if abs(f - prev) >= FAR])
+            frets = _single(int(rng.integers(1, N_STRINGS + 1)), prev)
+        notes.append(Note(unit * _pick(rng, HELD_MULTIPLES), frets))
+    return notes, "jumps"
+
+
+GENERAL_KINDS = {"strum": _gen_strum, "fingerstyle": _gen_fingerstyle, "let ring": _gen_let_ring,
+                 "arpeggio": _gen_arpeggio, "double stops": _gen_double_stops, "pedal": _gen_pedal,
+                 "voices": _gen_voices, "line": _gen_line, "jumps": _gen_jumps}
+
+
+def left_general(seed: int, n_songs: int, notes_per_song: int = 40) -> list[Song]:
+    """General left-hand training songs, balanced: the kinds (`GENERAL_KINDS`) take turns, chords are drawn
+    balanced over families and neck regions from `chord_voicings`, lines run in boxes from the open position
+    to fret 19, and every song's shortest note lasts 5..15 frames at 50..225 BPM.
+
+    Titles say the kind, e.g. "left-general-1 (fingerstyle)". Deterministic per seed; the first k songs of a
+    call with n_songs >= k are the same.
+    """
+    if notes_per_song < 1:
+        raise ValueError("notes_per_song must be >= 1")
+    rng = np.random.default_rng(seed)
+    kinds = list(GENERAL_KINDS)
+    songs = []
+    for i in range(n_songs):
+        tempo, unit = _rhythm(rng)
+        notes, label = GENERAL_KINDS[kinds[i % len(kinds)]](rng, notes_per_song, unit)
+        songs.append(Song(tempo, _sprinkle(rng, notes, notes_per_song), f"left-general-{i} ({label})"))
     return songs
 
 
@@ -531,3 +885,29 @@ def coverage(songs: Iterable[Song]) -> dict:
             out["string_sets"][set_name(*s) if s else "other"] += 1
     out["chord_fraction"] = out["chords"] / out["notes"] if out["notes"] else 0.0
     return out
+
+
+# ----------------------------------------------------------------------------------------------- by name
+
+STYLES = {  # (hand, style) -> (generator, default number of songs)
+    ("left", "exercises"): (left_exercises, 64),
+    ("left", "general"): (left_general, 2000),   # coverage keeps rising up to ~2000 songs (experiments/results)
+    ("right", "steady"): (right_patterns, 64),
+    ("right", "paper"): (paper_right_patterns, 64),
+}
+DEFAULT_STYLE = {"left": "general", "right": "mixed"}
+
+
+def material(hand: str, style: str | None, seed: int, n: int | None = None) -> list[Song]:
+    """Procedural songs for a hand by style name: left "exercises" or "general" (the general-purpose left hand's
+    balanced material); right "steady" (ours), "paper" (the authors' random patterns: a contiguous string set and
+    5-44 frames per note) or "mixed" (half each). n None: the style's default number."""
+    style = style or DEFAULT_STYLE.get(hand)
+    if hand == "right" and style == "mixed":
+        n = n or STYLES[("right", "steady")][1]
+        return right_patterns(seed, n - n // 2) + paper_right_patterns(seed, n // 2)
+    if (hand, style) not in STYLES:
+        names = sorted({s for h, s in STYLES if h == hand} | ({"mixed"} if hand == "right" else set()))
+        raise UserError(f"--style {style}: not a {hand}-hand style; expected one of {', '.join(names)}")
+    generate, default = STYLES[(hand, style)]
+    return generate(seed, n or default)

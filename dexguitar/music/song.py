@@ -15,21 +15,24 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Sequence
 
+from dexguitar.errors import InputError, read_input
 from dexguitar.world.guitar import N_FRETS, N_STRINGS, open_pitches
 
 MUTE = -1  # string not played during the note
 OPEN = 0   # string played without pressing any fret
+# Tab files larger than this are refused unread: 40x the largest tab we have (25 KB), while the slowest reader
+# (ASCII) takes ~4 s and ~120 MB per MiB.
+MAX_FILE_BYTES = 2**20
 
 
-class SongError(ValueError):
-    """Bad input: the message names the file, the position in it and what was expected."""
+class SongError(InputError):
+    """Bad input in a tab file: the message names the file, the position in it and what was expected."""
 
-    def __init__(self, path: str | Path | None, where: str | None, message: str):
-        self.path, self.where, self.detail = path, where, message
-        loc = str(path) if path is not None else "<input>"
-        if where:
-            loc += f":{where}"
-        super().__init__(f"{loc}: {message}")
+
+def read_bytes(path: Path, limit: int = MAX_FILE_BYTES) -> bytes:
+    """The bytes of a tab file; `SongError` if it is missing, unreadable or larger than `limit` (each reader says
+    what an empty file is not)."""
+    return read_input(path, "a tab file", SongError, limit, " (real tabs are tens of KB)", empty_ok=True)
 
 
 class Effect(enum.IntFlag):

@@ -88,16 +88,20 @@ Chord hints for the left hand (paper Fig. 13: the left hand holds the shape, the
 
 Errors
     Bad input raises `SongError(path, "line L, column C", what was expected)` (1-based text line and column;
-    tabs are expanded to 8 columns); nothing half-parsed is returned.
+    tabs are expanded to 8 columns); nothing half-parsed is returned. A file larger than `song.MAX_FILE_BYTES` is
+    refused unread, and the song must keep the limits of `timing` (tempo, shortest note, length; those errors name
+    the note by its 0-based index). Parsing takes time linear in the file.
 """
 from __future__ import annotations
 
+import bisect
 import dataclasses
 import re
 from fractions import Fraction
 from pathlib import Path
 
-from dexguitar.music.song import MUTE, Effect, Note, Song, SongError
+from dexguitar.music.song import MUTE, Effect, Note, Song, SongError, read_bytes
+from dexguitar.music.timing import check_tempo, validate
 from dexguitar.world.guitar import N_FRETS, N_STRINGS
 
 DEFAULT_TEMPO = 120.0                 # quarter-note beats per minute
@@ -112,12 +116,13 @@ _SPACER_CHARS = "-~"
 _EXPECTED_CHARS = ("frets 0-22, '-', '|', 'x' (mute), h/p (hammer-on/pull-off), '/' '\\' 's' (slide), "
                    "'(n)' (tie) or '~'")
 
-# optional label, then a body starting with '|' or '-' and no blanks; an optional comment after a final '|'
+# optional label, then a body starting with '|' or '-' and no blanks; an optional comment after a final '|'. Every
+# blank before the body belongs to exactly one group, so a non-matching line fails in linear time.
 _STRING_LINE = re.compile(
-    r"^(?P<indent>[ ]*)(?P<label>[A-Ga-g][#b]?\d?)?[ ]*(?P<body>[|\-]\S*?)(?:(?<=\|)[ ]+\S.*)?[ ]*$")
+    r"^(?P<indent>[ ]*)(?:(?P<label>[A-Ga-g][#b]?\d?)[ ]*)?(?P<body>[|\-]\S*?)(?:(?<=\|)[ ]+\S.*)?[ ]*$")
 _WORD = re.compile(r"[A-Za-z]{2,}")
-_HEADER = re.compile(r"^\s*(?P<key>title|tempo|bpm|grid|chords|chord)\b\s*(?P<sep>[:=])?\s*(?P<value>.*?)\s*$",
-                     re.IGNORECASE)
+_HEADER = re.compile(r"^\s*(?P<key>title|tempo|bpm|grid|chords|chord)\b\s*(?P<sep>[:=])?\s*(?P<value>.*)$",
+                     re.IGNORECASE)  # lines are stripped on the right: the value ends with the line
 _TEMPO_VALUE = re.compile(r"^(\d+(?:\.\d*)?|\.\d+)\s*(?:bpm)?$", re.IGNORECASE)
 _CHORD_DEF = re.compile(r"^(?P<name>[^\s=]+)\s*=\s*(?P<shape>\S.*)$")
 _TIE = re.compile(r"\((\d{1,2})\)")
@@ -154,11 +159,9 @@ def read_ascii_tab(source: str | Path, *, tempo: float | None = None, grid: str 
     """Read an ASCII tab file (see the module docstring for the syntax). Options override the file's headers."""
     path = Path(source)
     try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise SongError(path, None, "no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SongError(path, None, f"cannot read the file as UTF-8 text ({exc})") from None
+        text = read_bytes(path).decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise SongError(path, f"byte {exc.start}", f"cannot read the file as UTF-8 text ({exc.reason})") from None
     return parse_ascii_tab(text, path=path, tempo=tempo, grid=grid, title=title)
 
 
@@ -199,7 +202,7 @@ class _Parser:
         else:
             song_title = Path(self.path).stem if self.path is not None else ""
         notes = self._build_notes(parsed, hints, song_grid)
-        return Song(tempo=float(song_tempo), notes=tuple(notes), title=song_title)
+        return validate(Song(tempo=float(song_tempo), notes=tuple(notes), title=song_title), self.path)
 
     # ---------------------------------------------------------------- pass 1: systems
 
@@ -312,9 +315,13 @@ class _Parser:
 
     def _tempo_value(self, value: str, lineno: int | None, col: int | None) -> float:
         m = _TEMPO_VALUE.match(value.strip())
-        if m is None or not float(m.group(1)) > 0:
+        if m is None:
             raise self.error(lineno, col, f"malformed tempo '{value}': expected a positive number of quarter-note "
                                           "beats per minute, e.g. 'tempo: 100'")
+        try:
+            check_tempo(float(m.group(1)))
+        except ValueError as e:
+            raise self.error(lineno, col, str(e)) from None
         return float(m.group(1))
 
     def _grid_value(self, value: str, lineno: int | None, col: int | None) -> Fraction:
@@ -337,9 +344,11 @@ class _Parser:
         try:
             value = float(tempo)
         except (TypeError, ValueError):
-            value = 0.0
-        if not value > 0 or value != value or value == float("inf"):
-            raise self.error(None, None, f"tempo option must be a positive number, got {tempo!r}")
+            raise self.error(None, None, f"tempo option must be a number, got {tempo!r}") from None
+        try:
+            check_tempo(value)
+        except ValueError as e:
+            raise self.error(None, None, f"tempo option: {e}") from None
         return value
 
     def _grid_option(self, grid) -> Fraction:
@@ -582,13 +591,11 @@ class _Parser:
         if starts[0][0] > 0:
             starts.insert(0, (0, None))
 
+        hint_columns = [hg for hg, _ in hints]
+
         def hint_at(g: int):
-            shape = None
-            for hg, hs in hints:
-                if hg > g:
-                    break
-                shape = hs
-            return shape
+            k = bisect.bisect_right(hint_columns, g)
+            return hints[k - 1][1] if k else None
 
         notes: list[Note] = []
         for k, (g, onsets) in enumerate(starts):

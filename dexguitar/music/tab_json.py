@@ -18,10 +18,14 @@ A file holds a list of tracks; a track is `{"tempo": BPM, "notes": [note, ...]}`
 Extension: a track may carry `"title"`; the writer always writes it so that titles survive a round trip; without
 it the reader uses the file name (without suffix) as the title.
 
-Writing: the format has no slide, so `Effect.SLIDE` is written as `"hammer/pull"` (a legato note sounded by the
-left hand) and reads back as HAMMER or PULL. Durations are written exactly as `"a/b"`; the tempo as an integer when
-it is whole. Effects on strings that do not sound are dropped. For every other song `read(write(song)) == song`
-(provided its HAMMER/PULL flags agree with the fret direction, which is how the reader decides between them).
+Reading: the file may start with a UTF-8 byte-order mark; it is refused when larger than `song.MAX_FILE_BYTES`, and
+the song must keep the limits of `timing` (tempo, shortest note, length).
+
+Writing (only to a `.json` path): the format has no slide, so `Effect.SLIDE` is written as `"hammer/pull"` (a legato
+note sounded by the left hand) and reads back as HAMMER or PULL. Durations are written exactly as `"a/b"`; the tempo
+as an integer when it is whole. Effects on strings that do not sound are dropped. For every other song
+`read(write(song)) == song` (provided its HAMMER/PULL flags agree with the fret direction, which is how the reader
+decides between them).
 """
 from __future__ import annotations
 
@@ -30,7 +34,9 @@ import math
 from fractions import Fraction
 from pathlib import Path
 
-from dexguitar.music.song import MUTE, Effect, Note, Song, SongError
+from dexguitar.errors import UserError
+from dexguitar.music.song import MUTE, Effect, Note, Song, SongError, read_bytes
+from dexguitar.music.timing import check_tempo, validate
 from dexguitar.world.guitar import N_FRETS, N_STRINGS
 
 MAX_DENOMINATOR = 192   # decimal durations snap to a fraction with at most this denominator
@@ -105,8 +111,12 @@ def _parse_track(data, path, t: int) -> Song:
         if key not in data:
             raise SongError(path, where, f"missing key '{key}'")
     tempo = data["tempo"]
-    if not _is_number(tempo) or not math.isfinite(tempo) or tempo <= 0:
-        raise SongError(path, where, f"'tempo' must be a positive number of beats per minute, got {tempo!r}")
+    if not _is_number(tempo):
+        raise SongError(path, where, f"'tempo' must be a number of beats per minute, got {tempo!r}")
+    try:
+        check_tempo(tempo)
+    except ValueError as e:
+        raise SongError(path, where, f"'tempo': {e}") from None
     notes_in = data["notes"]
     if not isinstance(notes_in, list):
         raise SongError(path, where, "'notes' must be a list")
@@ -127,7 +137,7 @@ def _parse_track(data, path, t: int) -> Song:
         for s, f in enumerate(note.frets):
             if f != MUTE:
                 last_fret[s] = f
-    return Song(tempo=tempo, notes=tuple(notes), title=title)
+    return validate(Song(tempo=tempo, notes=tuple(notes), title=title), path, where)
 
 
 def _parse_note(raw, last_fret) -> Note:
@@ -171,14 +181,20 @@ def read_json_tab(path: str | Path, *, track: int = 0) -> Song:
     "track T, note N" with 0-based indices for bad content).
     """
     path = Path(path)
+    raw = read_bytes(path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as e:
-        raise SongError(path, None, f"cannot read file: {e}") from None
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise SongError(path, f"byte {e.start}", f"not UTF-8 text ({e.reason}): a JSON tab is a text file") from None
     try:
         data = json.loads(text)
     except json.JSONDecodeError as e:
         raise SongError(path, f"line {e.lineno}, column {e.colno}", f"not valid JSON: {e.msg}") from None
+    except RecursionError:
+        raise SongError(path, None, "not a tab: JSON nested too deeply (a tab is a list of tracks, each with a list "
+                                    "of notes)") from None
+    except ValueError as e:      # e.g. an integer of more than 4300 digits
+        raise SongError(path, None, f"not valid JSON: {e}") from None
     if isinstance(data, dict):  # lenient: a single track object instead of a list of tracks
         data = [data]
     if not isinstance(data, list):
@@ -221,5 +237,10 @@ def dumps_json_tab(song: Song) -> str:
 
 
 def write_json_tab(song: Song, path: str | Path) -> None:
-    """Write `song` as a one-track JSON tab file (see the module docstring for the mapping)."""
-    Path(path).write_text(dumps_json_tab(song), encoding="utf-8")
+    """Write `song` as a one-track JSON tab file (see the module docstring for the mapping). The path must end in
+    `.json`: JSON in a `.txt` would be read back as an ASCII tab."""
+    path = Path(path)
+    if path.suffix.lower() != ".json":
+        raise UserError(f"{path}: can only write the JSON tab format, to a file ending in .json "
+                        f"(got '{path.suffix or 'no suffix'}')")
+    path.write_text(dumps_json_tab(song), encoding="utf-8")

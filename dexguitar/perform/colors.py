@@ -12,8 +12,8 @@ The "so far" state is per note: it resets when the next note starts, like the en
 from __future__ import annotations
 
 import numpy as np
+from dexguitar.world.guitar import N_STRINGS
 
-N_STRINGS = 6
 GREY = np.array([0.8, 0.8, 0.78, 1.0], np.float32)      # the scene's "metal" material
 YELLOW = np.array([1.0, 0.82, 0.05, 1.0], np.float32)
 GREEN = np.array([0.1, 0.85, 0.2, 1.0], np.float32)

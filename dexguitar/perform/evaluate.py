@@ -1,7 +1,14 @@
 """Evaluation by the paper's rules: play whole songs with the mean action, collect per-note precision/recall/F1 for
-each hand (and both), and aggregate per song and per chord (for a Fig. 5 histogram)."""
+each hand (and both), and aggregate per song and per chord (for a Fig. 5 histogram).
+
+The songs are played at once, one env each, until every one is over (a `while_loop`, so no song length is compiled
+in). The policy's parameters and the songs are arguments of one cached, jitted program per (hand, env config, policy
+spec): evaluating another song set of the same capacities, the same policy after more training, or a synchronizer
+before and after (`policy.unsynchronized`) reuses it.
+"""
 from __future__ import annotations
 
+import time
 from collections import defaultdict
 
 import jax
@@ -9,14 +16,34 @@ import jax.numpy as jnp
 import numpy as np
 
 from dexguitar import envs as E
+from dexguitar.learn.policy import PolicySpec, act_fn, unsynchronized
 from dexguitar.music import timeline as TL
 
 HANDS = {"left": ("left",), "right": ("right",), "duet": ("left", "right", "both")}
 
 
+def rollout_notes(env, act, params, song_index, key, hands):
+    """Play song `song_index` of the env's batch from its start with `act(params, obs)` until it is over. Returns
+    (scores (W, hands, 6): [precision, recall, f1, tp, predicted, targets] of each window row, ended (W,): the row
+    was played to its end)."""
+    W = env.window_capacity
+
+    def body(carry):
+        state, scores, ended = carry
+        nxt = env.step(state, act(params, state.obs)[0])
+        row, end = state.cursor.note, nxt.info["note_end"]
+        value = jnp.stack([nxt.info[h] for h in hands])
+        scores = scores.at[row].set(jnp.where(end, value, scores[row]))
+        return nxt, scores, ended.at[row].set(ended[row] | end)
+    state = env.reset(key, song_index)
+    carry = (state, jnp.zeros((W, len(hands), 6), jnp.float32), jnp.zeros(W, bool))
+    _, scores, ended = jax.lax.while_loop(lambda c: ~c[0].done, body, carry)
+    return scores, ended
+
+
 def rollout_song(env, act, song_index: int, frames: int, key=None):
-    """Play song `song_index` of the env's batch from its start; `act(obs) -> action`. Returns per-step info
-    arrays (frames, ...) and the `done` mask."""
+    """Play song `song_index` of the env's batch from its start for `frames` steps, recording every step (for
+    videos); `act(obs) -> action`. Returns per-step info arrays (frames, ...) and the `alive` mask."""
     key = jax.random.PRNGKey(0) if key is None else key
     state = env.reset(key, song_index)
 
@@ -24,21 +51,21 @@ def rollout_song(env, act, song_index: int, frames: int, key=None):
         nxt = env.step(state, act(state.obs))
         alive = ~state.done
         info = jax.tree.map(lambda x: jnp.where(alive, x, jnp.zeros_like(x)), nxt.info)
-        info["links"] = nxt.links
-        info["qpos"] = nxt.data.qpos
+        info["links"] = nxt.body.links
+        info["qpos"] = nxt.body.data.qpos
         return jax.tree.map(lambda a, b: jnp.where(state.done, a, b), state, nxt), (info, alive)
     _, (info, alive) = jax.lax.scan(one, state, None, length=frames)
     return info, alive
 
 
 def note_scores(info, song, hands) -> list[dict]:
-    """One row per finished note: index, the note's strings, and [precision, recall, f1] per hand."""
+    """One row per finished note of a per-step recording (`rollout_song`): as `note_rows`."""
     ends = np.asarray(info["note_end"])
     rows = []
     for t in np.flatnonzero(ends):
         i = int(np.asarray(info["song_note"])[t])           # -1: the grace rest before the song
         if i < 0 and all(np.asarray(info[h])[t, 4] == 0 for h in hands):
-            continue                                           # a clean grace rest says nothing
+            continue
         note = song.notes[i] if 0 <= i < len(song.notes) else None
         row = {"note": i, "frame": int(t), "frets": list(note.frets) if note else None,
                "chord": bool(note and note.is_chord), "rest": bool(note and note.is_rest)}
@@ -46,6 +73,49 @@ def note_scores(info, song, hands) -> list[dict]:
             p, r, f1, tp, predicted, targets = np.asarray(info[h])[t, :6]
             row[h] = {"precision": float(p), "recall": float(r), "f1": float(f1), "tp": int(tp),
                       "predicted": int(predicted), "targets": int(targets)}
+        rows.append(row)
+    return rows
+
+
+_CACHE: dict = {}
+COMPILE_SECONDS: dict = {}        # how long each cached program took to compile (or to load from the disk cache)
+
+
+def _compiled(hand, env_config, spec, params, songs):
+    """(env, compiled play(params, songs) -> (scores, ended)): one per hand, env config, policy spec and song batch
+    capacity, kept for the life of the process."""
+    key = (hand, env_config, spec, str(jax.tree.map(lambda x: (x.shape, str(x.dtype)), songs)))
+    if key not in _CACHE:
+        env = E.make(hand, songs, env_config)
+        act = act_fn(spec, deterministic=True)
+
+        def play(params, songs_):
+            bound = env.bind(songs_)
+            n = songs_.n_notes.shape[0]
+            keys = jax.random.split(jax.random.PRNGKey(0), n)
+            return jax.vmap(lambda i, k: rollout_notes(bound, act, params, i, k, HANDS[hand]))(jnp.arange(n), keys)
+        t0 = time.perf_counter()
+        _CACHE[key] = (env, jax.jit(play).lower(params, songs).compile())
+        COMPILE_SECONDS[key] = time.perf_counter() - t0
+    return _CACHE[key]
+
+
+def note_rows(scores, ended, dur, song, hands) -> list[dict]:
+    """One row per finished note: its song index (-1: the grace rest), the frame it ended, its strings, and
+    [precision, recall, f1] per hand. A clean grace rest says nothing and is left out."""
+    ends = np.cumsum(dur) - 1
+    rows = []
+    for w in np.flatnonzero(ended):
+        i = int(w) - 1
+        if i < 0 and all(scores[w, k, 4] == 0 for k in range(len(hands))):
+            continue
+        note = song.notes[i] if 0 <= i < len(song.notes) else None
+        row = {"note": i, "frame": int(ends[w]), "frets": list(note.frets) if note else None,
+               "chord": bool(note and note.is_chord), "rest": bool(note and note.is_rest)}
+        for k, h in enumerate(hands):
+            p, r, f1, tp, predicted, targets = (float(x) for x in scores[w, k, :6])
+            row[h] = {"precision": p, "recall": r, "f1": f1, "tp": int(tp), "predicted": int(predicted),
+                      "targets": int(targets)}
         rows.append(row)
     return rows
 
@@ -71,19 +141,26 @@ def summarize(rows, hands) -> dict:
     return out
 
 
-def evaluate(hand: str, act, songs, env_config=None) -> dict:
-    """F1 of a policy `act(obs) -> action` on each song, all songs played at once (one env each, vmapped).
-    Returns {title: {"summary", "notes"}}."""
-    timelines = [TL.from_song(s) for s in songs]
+def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str | None = None) -> dict:
+    """F1 of a policy on each song, all songs played at once (one env each). `hand` defaults to the policy's
+    (a synchronizer plays the duet). Returns {title: {"summary", "notes"}}."""
+    hand = hand or spec.hand
     cfg = (env_config or E.EnvConfig()).evaluation()
-    env = E.make(hand, timelines, cfg)
-    frames = max(int(tl.n_frames) for tl in timelines) + 2
-    play = jax.jit(jax.vmap(lambda i: rollout_song(env, act, i, frames)))
-    info, _ = jax.device_get(play(jnp.arange(len(songs))))
+    batch = TL.batch([TL.from_song(s) for s in songs])
+    params = jax.tree.map(jnp.asarray, params)
+    env, play = _compiled(hand, cfg, spec, params, batch)
+    scores, ended = jax.device_get(play(params, batch))
     results = {}
     for i, song in enumerate(songs):
-        rows = note_scores(jax.tree.map(lambda x: x[i], info), song, HANDS[hand])
+        window = jax.device_get(env.bind(batch).sample_window(jax.random.PRNGKey(0), i))
+        rows = note_rows(scores[i], ended[i], np.asarray(window.dur), song, HANDS[hand])
         title = song.title or f"song{i}"
         results[title if title not in results else f"{title} ({i})"] = {"summary": summarize(rows, HANDS[hand]),
                                                                         "notes": rows}
     return results
+
+
+def evaluate_synchronizer(params: dict, spec: PolicySpec, songs, env_config=None) -> dict:
+    """{"before": results, "after": results}: a synchronizer's two frozen policies alone, then synchronized."""
+    return {"before": evaluate(unsynchronized(params), spec, songs, env_config),
+            "after": evaluate(params, spec, songs, env_config)}

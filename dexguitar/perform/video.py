@@ -1,12 +1,14 @@
-"""Watch a performance: the scene's "front" camera rendered headless, strings coloured per frame (`colors.py`), as an
-MP4 with the synthesized audio, or a PNG contact sheet when no ffmpeg is around.
+"""Watch a performance: the stage (`world.stage`) rendered headless from its "front" camera (both hands) or its
+"closeup" (the fretting hand), strings coloured per frame (`colors.py`), an optional caption, as an MP4 with the
+synthesized audio, or a PNG contact sheet when no ffmpeg is around.
 
-Why this way: MuJoCo's own OpenGL renderer on the visual scene needs nothing beyond MuJoCo and an offscreen GL
-(OSMesa or EGL, through `motion.render.Offscreen`); only the kinematics are recomputed per frame (the recorded
-qpos is the whole state of the weightless hands). The string geoms lose their material so `geom_rgba` shows, and
-are drawn thicker than the real ones (`string_radius`: sub-millimetre strings are a pixel wide in a 640 x 360
-frame). MP4 writing
-uses `imageio-ffmpeg`, which ships its own ffmpeg binary: an optional extra, `pip install imageio-ffmpeg`.
+Why this way: MuJoCo's own OpenGL renderer needs nothing beyond MuJoCo and an offscreen GL (OSMesa or EGL, through
+`motion.render.Offscreen`); only the kinematics are recomputed per frame (the recorded qpos is the whole state of
+the weightless hands). The string geoms lose their material so `geom_rgba` shows, and are drawn at least
+`STRING_PIXELS` wide (sub-millimetre strings would be a pixel wide in a view of the whole guitar). The close-up
+glides along the neck after the fretting wrist, smoothed over `FOLLOW_SECONDS` so that it does not shake with the
+hand. MP4 writing uses `imageio-ffmpeg`, which ships its own ffmpeg binary: an optional extra,
+`pip install imageio-ffmpeg`.
 """
 from __future__ import annotations
 
@@ -17,60 +19,97 @@ import mujoco
 import numpy as np
 
 from dexguitar.motion.render import Offscreen, fixed_camera, strip_frames, write_png
+from dexguitar.world import scene as S
+from dexguitar.world.guitar import N_STRINGS
 
-N_STRINGS = 6
+STRING_PIXELS = 3.0            # the least width of a string on screen
+# x264: "veryfast" takes half the encoding time of the default for about the same file size; two threads, as more
+# only fight the renderer for the CPU (about 20 % slower in all on 2 cores).
+X264 = ["-preset", "veryfast", "-threads", "2"]
+FOLLOW_SECONDS = 1.0           # the close-up's moving average of the fretting wrist's place along the neck
 
 
 class SceneRenderer:
-    """Renders (qpos, string colours) frames of a compiled visual scene (`scene.build_spec(..., visual=True)`).
+    """Renders (qpos, string colours, caption) frames of a compiled stage (`stage.stage_model`) or visual scene.
     `fast`: no shadows and no multisampling (about 4x faster with software GL)."""
 
-    def __init__(self, model: mujoco.MjModel, width: int = 640, height: int = 360, camera: str = "front",
-                 string_radius: float = 0.0015, fast: bool = True):
+    def __init__(self, model: mujoco.MjModel, width: int = 1280, height: int = 720, camera: str = "front",
+                 fast: bool = True):
         m = model
         self.model, self.width, self.height = m, width, height
         self.strings = []
         for i in range(1, N_STRINGS + 1):
             g = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, f"string{i}")
             if g < 0:
-                raise ValueError(f"the model has no geom 'string{i}': build it with visual=True")
+                raise ValueError(f"the model has no geom 'string{i}': render the stage (stage.stage_model)")
             self.strings.append(g)
         self.strings = np.asarray(self.strings)
-        self._saved = (m.geom_matid[self.strings].copy(), m.geom_rgba[self.strings].copy(),
-                       m.geom_size[self.strings].copy())
-        m.geom_matid[self.strings] = -1                     # a material would override geom_rgba
-        m.geom_size[self.strings, 0] = np.maximum(m.geom_size[self.strings, 0], string_radius)
+        self.camera = fixed_camera(m, camera)
         self.data = mujoco.MjData(m)
         if m.nkey:
             mujoco.mj_resetDataKeyframe(m, self.data, 0)
-        self.camera = fixed_camera(m, camera)
+        cid = self.camera.fixedcamid
+        self._saved = (m.geom_matid[self.strings].copy(), m.geom_rgba[self.strings].copy(),
+                       m.geom_size[self.strings].copy(), m.cam_pos[cid].copy(), m.vis.quality.offsamples)
         # Software GL (OSMesa) spends most of a frame on shadow maps and multisampling: off unless asked for.
-        self._saved_quality = (m.vis.quality.offsamples, m.vis.quality.shadowsize)
         if fast:
             m.vis.quality.offsamples = 0
-        self._screen = Offscreen(m, width, height, fast)
+        try:
+            self._screen = Offscreen(m, width, height, fast)
+        except Exception:
+            m.vis.quality.offsamples = self._saved[4]
+            raise
+        m.geom_matid[self.strings] = -1                     # a material would override geom_rgba
+        m.geom_size[self.strings, 0] = np.maximum(m.geom_size[self.strings, 0],
+                                                  STRING_PIXELS / 2 * pixel_size(m, self.data, cid, height))
 
-    def frame(self, qpos, colors=None) -> np.ndarray:
-        """(H, W, 3) uint8 image of the pose `qpos` (nq,) with string colours (6, 4) (None: as they are)."""
+    def frame(self, qpos, colors=None, caption: str | None = None, camera_offset=None) -> np.ndarray:
+        """(H, W, 3) uint8 image of the pose `qpos` (nq,) with string colours (6, 4) (None: as they are), a caption
+        (None: none) and the camera moved by `camera_offset` (3,) in its body's frame (None: where it is)."""
         self.data.qpos[:] = qpos
         if colors is not None:
             self.model.geom_rgba[self.strings] = np.asarray(colors, np.float32)
-        return self._screen.render(self.data, self.camera)
+        if camera_offset is not None:
+            self.model.cam_pos[self.camera.fixedcamid] = self._saved[3] + camera_offset
+        return self._screen.render(self.data, self.camera, caption)
 
     def close(self):
-        """Free the GL context and give the model its string materials, colours and sizes back."""
+        """Free the GL context and give the model its string materials, colours, sizes and its camera back."""
         if self._screen is not None:
             self._screen.close()
             self._screen = None
             m = self.model
-            m.geom_matid[self.strings], m.geom_rgba[self.strings], m.geom_size[self.strings] = self._saved
-            m.vis.quality.offsamples = self._saved_quality[0]
+            m.geom_matid[self.strings], m.geom_rgba[self.strings], m.geom_size[self.strings] = self._saved[:3]
+            m.cam_pos[self.camera.fixedcamid], m.vis.quality.offsamples = self._saved[3:]
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
         self.close()
+
+
+def pixel_size(model: mujoco.MjModel, data: mujoco.MjData, camera: int, height: int) -> float:
+    """Metres per pixel, at the guitar, in a `height`-line frame from a fixed camera."""
+    mujoco.mj_kinematics(model, data)
+    mujoco.mj_camlight(model, data)
+    guitar = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "guitar")
+    distance = np.linalg.norm(data.cam_xpos[camera] - data.xpos[guitar])
+    return float(2 * distance * np.tan(np.radians(model.cam_fovy[camera]) / 2) / height)
+
+
+def follow_fretting_hand(model: mujoco.MjModel, qpos_frames, fps: float) -> np.ndarray:
+    """(T, 3) offsets of the close-up in the guitar frame: the fretting wrist's place along the neck (its y slide,
+    0 where the close-up is set), a moving average over FOLLOW_SECONDS."""
+    y = np.asarray(qpos_frames)[:, S.hand_index(model, "left").qpos[1]]
+    n = max(1, int(round(FOLLOW_SECONDS * fps)))
+    smooth = np.convolve(np.pad(y, (n // 2, n - 1 - n // 2), mode="edge"), np.ones(n) / n, mode="valid")
+    return np.stack([np.zeros_like(smooth), smooth, np.zeros_like(smooth)], axis=1)
+
+
+def camera_offsets(model: mujoco.MjModel, qpos_frames, fps: float, camera: str):
+    """Per-frame camera offsets (T, 3): the close-up follows the fretting hand, other cameras stay (None)."""
+    return follow_fretting_hand(model, qpos_frames, fps) if camera == "closeup" else None
 
 
 def have_ffmpeg() -> bool:
@@ -81,7 +120,7 @@ def have_ffmpeg() -> bool:
         return False
 
 
-def _check(qpos_frames, colors, model):
+def _check(qpos_frames, colors, captions, model):
     qpos_frames = np.asarray(qpos_frames, np.float64)
     if qpos_frames.ndim != 2 or qpos_frames.shape[1] != model.nq:
         raise ValueError(f"qpos_frames: expected (T, {model.nq}), got {qpos_frames.shape}")
@@ -89,25 +128,34 @@ def _check(qpos_frames, colors, model):
         colors = np.asarray(colors, np.float32)
         if colors.shape != (len(qpos_frames), N_STRINGS, 4):
             raise ValueError(f"colors: expected ({len(qpos_frames)}, 6, 4), got {colors.shape}")
+    if captions is not None and len(captions) != len(qpos_frames):
+        raise ValueError(f"captions: expected {len(qpos_frames)}, got {len(captions)}")
     return qpos_frames, colors
 
 
-def render_video(model: mujoco.MjModel, qpos_frames, colors, out, fps: float = 60.0, audio=None, *,
-                 width: int = 640, height: int = 360, camera: str = "front", quality: int = 7) -> Path:
-    """Write `out` (.mp4): one video frame per row of qpos_frames (T, nq) with string colours (T, 6, 4) (or None),
-    at `fps`; `audio`: a WAV path muxed in as AAC (the track should last T / fps seconds). Needs the optional
-    package imageio-ffmpeg."""
+def _pick(items, t):
+    return None if items is None else items[t]
+
+
+def render_video(model: mujoco.MjModel, qpos_frames, colors, out, fps: float = 30.0, audio=None, *,
+                 width: int = 1280, height: int = 720, camera: str = "front", captions=None,
+                 quality: int = 7) -> Path:
+    """Write `out` (.mp4): one video frame per row of qpos_frames (T, nq) with string colours (T, 6, 4) and
+    captions (T strings) (either may be None), at `fps`; `audio`: a WAV path muxed in as AAC, cut to the T / fps
+    seconds of the picture (a shorter track is not: every frame stays). Needs the optional package imageio-ffmpeg."""
     try:
         import imageio_ffmpeg
     except ImportError:
         raise RuntimeError(f"{out}: writing an .mp4 needs the optional package imageio-ffmpeg "
                            "(pip install imageio-ffmpeg, or pip install -e '.[video]'); "
                            "use render_frames_png for a PNG contact sheet instead") from None
-    qpos_frames, colors = _check(qpos_frames, colors, model)
+    qpos_frames, colors = _check(qpos_frames, colors, captions, model)
+    offsets = camera_offsets(model, qpos_frames, fps, camera)
     out = Path(out)
-    extra = {}
+    extra = {"output_params": list(X264)}
     if audio is not None:
-        extra = {"audio_path": str(audio), "audio_codec": "aac", "output_params": ["-shortest"]}
+        seconds = len(qpos_frames) / fps                    # the picture's length rules: a longer track is cut
+        extra = {"audio_path": str(audio), "audio_codec": "aac", "output_params": X264 + ["-t", f"{seconds:.6f}"]}
     with SceneRenderer(model, width, height, camera) as r:
         writer = imageio_ffmpeg.write_frames(str(out), (width, height), fps=fps, macro_block_size=1,
                                              quality=quality, ffmpeg_log_level="error", **extra)
@@ -116,20 +164,23 @@ def render_video(model: mujoco.MjModel, qpos_frames, colors, out, fps: float = 6
             writer.send(None)
         try:
             for t in range(len(qpos_frames)):
-                writer.send(np.ascontiguousarray(r.frame(qpos_frames[t], None if colors is None else colors[t])))
+                image = r.frame(qpos_frames[t], _pick(colors, t), _pick(captions, t), _pick(offsets, t))
+                writer.send(np.ascontiguousarray(image))
         finally:
             writer.close()
     return out
 
 
 def render_frames_png(model: mujoco.MjModel, qpos_frames, colors, out, *, frames: int = 8, columns: int = 4,
-                      indices=None, width: int = 480, height: int = 270, camera: str = "front") -> Path:
+                      indices=None, width: int = 480, height: int = 270, camera: str = "front", captions=None,
+                      fps: float = 60.0) -> Path:
     """A PNG contact sheet: `frames` evenly spaced frames (or the given `indices`) in rows of `columns`; needs no
-    ffmpeg. Returns the path."""
-    qpos_frames, colors = _check(qpos_frames, colors, model)
+    ffmpeg. `fps`: the frame rate of qpos_frames (for the close-up's smoothing). Returns the path."""
+    qpos_frames, colors = _check(qpos_frames, colors, captions, model)
+    offsets = camera_offsets(model, qpos_frames, fps, camera)
     idx = strip_frames(len(qpos_frames), frames) if indices is None else np.asarray(indices, int)
     with SceneRenderer(model, width, height, camera) as r:
-        images = [r.frame(qpos_frames[t], None if colors is None else colors[t]) for t in idx]
+        images = [r.frame(qpos_frames[t], _pick(colors, t), _pick(captions, t), _pick(offsets, t)) for t in idx]
     columns = max(1, min(columns, len(images)))
     rows = -(-len(images) // columns)
     sheet = np.full((rows * height, columns * width, 3), 255, np.uint8)

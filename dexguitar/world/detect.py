@@ -4,7 +4,8 @@ Pure JAX (jit- and vmap-able, float32-safe, no Python branching on traced values
 frame (see `dexguitar.world.guitar`). The guitar geometry enters as constants, so a `Guitar` (frozen, hashable)
 is meant to be a closure value or a static argument, never a traced one.
 
-- `segment_distance`, `point_segment_distance`: closest points between segments / a point and a segment.
+- `segment_distance`, `point_segment_distance`: closest points between segments / a point and a segment (from
+  `dexguitar.world.geometry`, re-exported here for the press and reward code).
 - `string_contacts`, `string_distances`, `pressed_frets`: left-hand presses from finger capsule axes.
 - `pick_crossings`: right-hand picks from one control step of pick motion.
 """
@@ -15,73 +16,20 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
+from dexguitar.world.geometry import LEN2_EPS, dot, safe_div, segment_distance
 from dexguitar.world.guitar import GUITAR, PRESS_DISTANCE, Guitar
 
-# A segment shorter than sqrt(_LEN2_EPS) (1 um) is treated as a point.
-_LEN2_EPS = 1e-12
-# Segments whose directions have sin^2(angle) below this are treated as parallel (float32 cancellation margin).
-_PARALLEL_EPS = 1e-6
+__all__ = ["Crossings", "NOT_PICKED_T", "fret_at", "pick_crossings", "pressed_frets", "string_contacts",
+           "string_distances"]
+
 # A pick within this distance (m) of a string's line counts as on the line (neither side).
 _ON_LINE_TOL = 1e-6
 # `Crossings.t` where a string was not picked (any value > 1 would do; finite to keep arithmetic NaN-free).
 NOT_PICKED_T = 1e9
 
 
-def _dot(a, b):
-    return jnp.sum(a * b, axis=-1)
-
-
-def _safe_div(num, den, ok, fallback=0.0):
-    """num / den where `ok`, else `fallback`; the double `where` keeps gradients finite where not ok."""
-    return jnp.where(ok, num / jnp.where(ok, den, 1.0), fallback)
-
-
 def _float_dtype(x):
     return jnp.promote_types(jnp.asarray(x).dtype, jnp.float32)
-
-
-def segment_distance(p0, p1, q0, q1):
-    """Squared closest distance between segments p0->p1 and q0->q1 (..., 3), broadcasting over leading dims.
-
-    Returns (dist2, s, t): the closest points are p0 + s (p1 - p0) and q0 + t (q1 - q0), s, t in [0, 1].
-    Parallel and zero-length segments give a valid (not necessarily unique) closest pair, no NaN (also in
-    gradients).
-    """
-    d1 = p1 - p0
-    d2 = q1 - q0
-    r = p0 - q0
-    a = _dot(d1, d1)
-    e = _dot(d2, d2)
-    b = _dot(d1, d2)
-    c = _dot(d1, r)
-    f = _dot(d2, r)
-    a_ok = a > _LEN2_EPS
-    e_ok = e > _LEN2_EPS
-    denom = a * e - b * b
-    general = a_ok & e_ok & (denom > _PARALLEL_EPS * a * e)
-    # s minimising the distance to q's infinite line (general case), or to the point q0 (q degenerate);
-    # parallel: s = 0, then t and s are fixed up below.
-    s_line = jnp.clip(_safe_div(b * f - c * e, denom, general), 0.0, 1.0)
-    s_point = jnp.clip(_safe_div(-c, a, a_ok), 0.0, 1.0)
-    s = jnp.where(general, s_line, jnp.where(e_ok, 0.0, s_point))
-    t = _safe_div(b * s + f, e, e_ok)
-    # t outside [0, 1]: clamp it and take the s closest to that end point of q.
-    s_at_q0 = s_point
-    s_at_q1 = jnp.clip(_safe_div(b - c, a, a_ok), 0.0, 1.0)
-    s = jnp.where(t < 0.0, s_at_q0, jnp.where(t > 1.0, s_at_q1, s))
-    t = jnp.clip(t, 0.0, 1.0)
-    diff = r + s[..., None] * d1 - t[..., None] * d2
-    return _dot(diff, diff), s, t
-
-
-def point_segment_distance(p, a, b):
-    """Squared distance from point p to segment a->b (..., 3) and the closest-point parameter t in [0, 1]."""
-    ab = b - a
-    ap = p - a
-    l2 = _dot(ab, ab)
-    t = jnp.clip(_safe_div(_dot(ap, ab), l2, l2 > _LEN2_EPS), 0.0, 1.0)
-    diff = ap - t[..., None] * ab
-    return _dot(diff, diff), t
 
 
 # ----------------------------------------------------------------------------------------------------- presses
@@ -118,7 +66,7 @@ def string_distances(segments, guitar: Guitar = GUITAR):
     """(6,) minimum distance (m) from any finger segment axis (S, 2, 3) to each string (gradient-safe sqrt)."""
     dist2, _ = string_contacts(segments, guitar)
     d2 = jnp.min(dist2, axis=0)
-    ok = d2 > _LEN2_EPS
+    ok = d2 > LEN2_EPS
     return jnp.where(ok, jnp.sqrt(jnp.where(ok, d2, 1.0)), 0.0)
 
 
@@ -164,14 +112,14 @@ def pick_crossings(p_prev, p_now, guitar: Guitar = GUITAR, depth: float = 0.0) -
     # the guitar is mirrored.
     n = jnp.asarray(np.stack([-(strings[:, 1, 1] - strings[:, 0, 1]), strings[:, 1, 0] - strings[:, 0, 0]], -1)
                     / d_len[:, None], dt)                          # (6, 2)
-    side_prev = _dot(p_prev[None, :2] - a[:, :2], n)               # signed xy distance to each string's line
-    side_now = _dot(p_now[None, :2] - a[:, :2], n)
+    side_prev = dot(p_prev[None, :2] - a[:, :2], n)               # signed xy distance to each string's line
+    side_now = dot(p_now[None, :2] - a[:, :2], n)
     tol = _ON_LINE_TOL
     crosses = ((side_prev > tol) & (side_now <= tol)) | ((side_prev < -tol) & (side_now >= -tol))
     # If side_now is inside the tolerance band, the crossing may be reached fractionally after t = 1: clip.
-    u = jnp.clip(_safe_div(side_prev, side_prev - side_now, crosses), 0.0, 1.0)
+    u = jnp.clip(safe_div(side_prev, side_prev - side_now, crosses), 0.0, 1.0)
     x = p_prev[None, :] + u[:, None] * (p_now - p_prev)[None, :]   # (6, 3) pick at the crossing
-    v = _dot(x[:, :2] - a[:, :2], d[:, :2]) / jnp.asarray(d_len ** 2, dt)
+    v = dot(x[:, :2] - a[:, :2], d[:, :2]) / jnp.asarray(d_len ** 2, dt)
     z_string = a[:, 2] + jnp.clip(v, 0.0, 1.0) * d[:, 2]
     picked = crosses & (u > 0.0) & (v >= 0.0) & (v <= 1.0) & (x[:, 2] < z_string - depth)
 

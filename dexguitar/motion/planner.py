@@ -1,0 +1,695 @@
+"""The IK planner: hand-made motions that play a song window with our hands, and the scripted player that plays
+them through the envs (no learning).
+
+Why it exists: if motions that put fingertips on the press targets and sweep the pick across the target strings score
+F1 ~ 1 through `envs.make(...)`, then guitar geometry, press / pick detection, note bookkeeping and metrics agree with
+each other (`perform.scripted` prints that table). The same motions, recorded, are the shipped reference clips
+(`motion.defaults`).
+
+How it plays, per hand, before the rollout (`ScriptedPlayer.plan`):
+1. Keyframes in the guitar frame. Left hand: one-finger-per-fret hand positions covering 4 frets; each note's
+   target strings get a fingertip on p_{i,k} resting on the fretboard, the other fingers hover 10 mm above the
+   strings. Right hand: the pick sweeps from the gap before the first target string to the gap after the last,
+   3 mm below string height, choosing the stroke direction that starts where the last one ended (alternate picking
+   on one string), and hovers 6 mm above the strings in between.
+2. Joint targets by least squares on MuJoCo C kinematics (`motion.kinematics.HandKinematics`; cached per keyframe,
+   warm-started), joined by minimum-jerk interpolation with per-finger timing that anticipates the onset wherever
+   an early press cannot spoil the previous note.
+3. `Tracker`: the hands are slow PD systems (kp = 10; the 0.2 kg wrist rings for ~0.5 s), so the desired joint
+   trajectory is turned into PD targets by a one-step inverse model, computed by finite differences with
+   `mujoco.rollout` on the same model the env uses. The result is an open-loop action sequence for the env.
+4. Both hands (duet): the left hand is planned and simulated first; the right hand crosses each note's strings only
+   once the simulated left hand holds the note (the duet's strict gate counts earlier picks as wrong).
+`ScriptedPlayer.play` rolls the MJX env with those actions (vmapped over songs) and reads the per-note scores from
+`State.info`.
+"""
+from __future__ import annotations
+
+import copy
+import dataclasses
+import time
+import warnings
+
+import jax
+import jax.numpy as jnp
+import mujoco
+import numpy as np
+from mujoco import rollout
+from scipy.optimize import least_squares
+
+from dexguitar.envs import scoring
+from dexguitar.motion.kinematics import HandKinematics
+from dexguitar.world import detect
+from dexguitar.world import hands as H
+from dexguitar.world import scene as S
+from dexguitar.world.geometry import point_segment_distance
+from dexguitar.world.guitar import GUITAR, N_STRINGS
+
+DT = 1.0 / S.CONTROL_HZ
+
+
+# ------------------------------------------------------------------------------------------------- notes
+
+@dataclasses.dataclass(frozen=True)
+class Notes:
+    """A song window as numpy: left goal (n, 6), pick targets (n, 6), onsets (n + 1,) in control steps."""
+
+    left: np.ndarray
+    pick: np.ndarray
+    onset: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return len(self.left)
+
+    @property
+    def frames(self) -> int:
+        return int(self.onset[-1])
+
+    @classmethod
+    def from_window(cls, window) -> "Notes":
+        n = int(np.asarray(window.n))
+        dur = np.asarray(window.dur)[:n].astype(int)
+        return cls(np.asarray(window.left)[:n].astype(int), np.asarray(window.pick)[:n].astype(bool),
+                   np.concatenate([[0], np.cumsum(dur)]))
+
+
+def min_jerk(s):
+    s = np.clip(s, 0.0, 1.0)
+    return s ** 3 * (10 - 15 * s + 6 * s ** 2)
+
+
+# ------------------------------------------------------------------------------------------------- tracking
+
+class Tracker:
+    """PD targets that make MuJoCo follow a desired joint trajectory.
+
+    Each control step holds one PD target for `SUBSTEPS` physics steps. The step's effect on (qpos, qvel) is close to
+    affine in the target, so one batched rollout (nominal + one perturbation per actuator) gives the local inverse
+    model; the target minimises |q - q_des| + w_v |v - v_des| at the end of the step (slides weighted x10: 1 cm ~
+    0.1 rad), regularised toward the desired pose. The perturbed rollouts run without contacts: across a contact
+    onset finite differences are meaningless and once made the tracker kick the wrist by 0.4 m; the contact-free
+    model is a smooth approximate Jacobian, and the nominal rollout (with contacts) keeps the prediction exact.
+    Closing the loop in simulation makes the plan exact for MuJoCo C; MJX replays it open-loop and the PD absorbs the
+    small differences.
+    """
+
+    def __init__(self, scene: str, w_v: float = 0.03, reg: float = 1e-4, eps: float = 1e-3):
+        self.model = S.build_model(scene)
+        self.data = mujoco.MjData(self.model)
+        self.threads = [mujoco.MjData(self.model)]
+        m = self.model
+        self.free = _without_contacts(m)
+        lo, hi = m.actuator_ctrlrange.T
+        self.home = m.key_qpos[0].copy()
+        half = (hi - lo) / 2
+        self.half = half
+        # `GuitarEnv.action_to_ctrl`: ctrl = clip(home + clip(a, -1, 1) * half, lo, hi)
+        self.u_lo, self.u_hi = np.maximum(lo, self.home - half), np.minimum(hi, self.home + half)
+        self.scale = np.ones(m.nv)
+        for j in range(m.njnt):
+            if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE:
+                self.scale[m.jnt_dofadr[j]] = 10.0
+        self.w_v, self.reg, self.eps = w_v, reg, eps
+        assert m.nq == m.nv == m.nu, "hinges and slides only, one actuator per joint"
+        assert all(m.actuator_trnid[i, 0] == i for i in range(m.nu)), "actuator i drives joint i"
+
+    def track(self, q_des: np.ndarray):
+        """q_des (T + 1, nq) with q_des[0] the start pose (the home keyframe). Returns ctrl (T, nu), q (T + 1, nq)."""
+        m, d = self.model, self.data
+        mujoco.mj_resetDataKeyframe(m, d, 0)
+        mujoco.mj_forward(m, d)
+        T, nu, nq = len(q_des) - 1, m.nu, m.nq
+        v_des = np.gradient(q_des, DT, axis=0)
+        spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+        state = np.empty(mujoco.mj_stateSize(m, spec))
+        pert = np.vstack([np.zeros((2, nu)), self.eps * np.eye(nu)])
+        models = [m] + [self.free] * (nu + 1)
+        w = np.concatenate([self.scale, self.w_v * self.scale])
+        ctrl = np.empty((T, nu))
+        qs = np.empty((T + 1, nq))
+        qs[0] = d.qpos
+        for t in range(T):
+            mujoco.mj_getState(m, d, state, spec)
+            u0 = np.clip(q_des[t + 1], self.u_lo, self.u_hi)
+            sign = np.where(u0 + self.eps > self.u_hi, -1.0, 1.0)       # stay inside ctrlrange (MuJoCo clamps)
+            controls = np.repeat((u0 + pert * sign)[:, None, :], S.SUBSTEPS, axis=1)
+            out, _ = rollout.rollout(models, self.threads, state[None], controls,
+                                     initial_warmstart=d.qacc_warmstart[None].copy())
+            x = out[:, -1, 1:1 + nq + m.nv]                    # FULLPHYSICS: time, qpos, qvel, ...
+            B = (x[2:] - x[1]).T / (self.eps * sign)           # (2 nv, nu), contact-free
+            err = np.concatenate([q_des[t + 1], v_des[t + 1]]) - x[0]
+            Bw, ew = B * w[:, None], err * w
+            du = np.linalg.solve(Bw.T @ Bw + self.reg * np.eye(nu), Bw.T @ ew)
+            u = np.clip(u0 + du, self.u_lo, self.u_hi)
+            d.ctrl[:] = u
+            for _ in range(S.SUBSTEPS):
+                mujoco.mj_step(m, d)
+            ctrl[t] = u
+            qs[t + 1] = d.qpos
+        return ctrl, qs
+
+    def to_action(self, ctrl):
+        """The env action whose PD targets are `ctrl` (inverse of `GuitarEnv.action_to_ctrl` inside its reach)."""
+        return (ctrl - self.home) / self.half
+
+
+def _without_contacts(model: mujoco.MjModel) -> mujoco.MjModel:
+    free = copy.copy(model)
+    free.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
+    return free
+
+
+# ------------------------------------------------------------------------------------------------- clearance
+
+def _clearance(a0, a1, b0, b1, n=9):
+    """Approximate closest distance between segments a0->a1 and b0->b1: the nearest of n points along the first.
+    Enough for a soft clearance term, and what the shipped clips were planned with (the exact
+    `geometry.segment_distance` would re-plan them)."""
+    t = np.linspace(0, 1, n)[:, None]
+    d2, _ = point_segment_distance(a0[None] + t * (a1 - a0)[None], b0[None], b1[None])
+    return np.sqrt(d2.min())
+
+
+# ------------------------------------------------------------------------------------------------- right hand
+
+class ScriptedRight:
+    """The picking hand: the pick point follows strokes across the target strings, found by damped least squares
+    on the wrist (slides penalised: they are slow) with the fingers kept in the home grip."""
+
+    depth = 0.003          # stroke bottom below string height (training needs >= 1 mm, evaluation > 0)
+    hover = 0.006          # between notes, above string height
+    travel = 0.010         # when passing over other strings
+    low_apex = 0.0025      # between strokes less than 2 frames apart (no time to rise to `hover`)
+    stroke_frames = 8      # one string; +2 per extra string
+    cross_frame = 2        # the (first) string is crossed during this step of the note
+
+    def __init__(self):
+        self.guitar = GUITAR
+        self.kin = HandKinematics("right")
+        self.kin.set(self.kin.home)
+        self.pick0 = self.kin.site(self.kin.hand.pick)
+        self.y = self.pick0[1]
+        sign = self.guitar.sign
+        self.xs = np.array([self.guitar.string_x(i + 1, self.y) for i in range(N_STRINGS)])
+        gap = np.abs(np.diff(self.xs)).mean()
+        # gaps: g[0] beyond string 1, g[i] between strings i and i+1 (0-based i-1, i), g[6] beyond string 6
+        self.gaps = np.concatenate([[self.xs[0] + sign * gap / 2], (self.xs[:-1] + self.xs[1:]) / 2,
+                                    [self.xs[-1] - sign * gap / 2]])
+        self.active = np.arange(6)                       # wrist slides and hinges move, fingers hold the pick
+        self.weights = np.array([0.03, 0.03, 0.03, 0.001, 0.001, 0.001])   # per m, per rad
+
+    # --- the pick path
+    def strokes(self, notes: Notes, earliest=None):
+        """Segments (t0, t1, x0, x1, kind) of the pick's motion across the strings; kind: "travel" (at hover
+        height, lifted higher over strings in between) or "stroke" (down to `depth` below the strings).
+        earliest: optional (n,) first control step at which each note's strings may be crossed (the duet: once the
+        left hand holds the note)."""
+        s = self.guitar.sign
+        pos, t_free = self.pick0[0], 0.0
+        segs = []
+        for i in range(notes.n):
+            tg = np.flatnonzero(notes.pick[i])
+            if len(tg) == 0:
+                continue
+            a, b = tg.min(), tg.max()                                  # a is nearer string 1
+            down = (self.gaps[b + 1], self.gaps[a])                    # down-stroke: toward string 1
+            up = down[::-1]
+            if (pos - self.xs[b]) * s < 0:                             # on the string-6 side of the targets
+                start, end = down
+            elif (pos - self.xs[a]) * s > 0:                           # on the string-1 side
+                start, end = up
+            else:
+                start, end = down if abs(pos - down[0]) <= abs(pos - up[0]) else up
+            n_str = b - a + 1
+            dur = notes.onset[i + 1] - notes.onset[i]
+            D = self.stroke_frames + 2 * (n_str - 1)
+            tau_c = _min_jerk_inverse(0.5 / n_str)                       # first crossing, as a fraction of D
+            step = notes.onset[i] + self.cross_frame
+            if earliest is not None:
+                step = max(step, int(earliest[i]) + 1)
+            cross = step + 0.5                                            # cross in the middle of that step
+            t0 = cross - D * tau_c
+            if abs(start - pos) > 1e-6:
+                t_min = t_free + float(np.clip(2 + abs(start - pos) / 0.006, 3, 10))
+                segs.append((t_free, max(t0, t_min), pos, start, "travel"))
+            else:
+                t_min = t_free
+            if t_min > t0:                                # late: a quicker stroke (>= 6 frames) to catch up
+                D = float(np.clip((cross - t_min) / tau_c, 6, D))
+                t0 = t_min
+            if t0 + D * tau_c > notes.onset[i] + dur - 0.5:
+                warnings.warn(f"note {i}: the pick cannot reach its stroke within the note")
+            segs.append([t0, t0 + D, start, end, ["stroke", tau_c, self.hover, self.hover]])
+            pos, t_free = end, t0 + D
+        for prev, nxt in zip(segs[:-1], segs[1:]):      # back-to-back strokes: a low apex between them
+            if prev[4][0] == nxt[4][0] == "stroke" and nxt[0] - prev[1] < 2.0:
+                prev[4][3] = nxt[4][2] = self.low_apex
+        return segs, pos
+
+    def pick_path(self, notes: Notes, earliest=None) -> np.ndarray:
+        """(T + 1, 3) pick point at every control step boundary (guitar frame)."""
+        segs, last = self.strokes(notes, earliest)
+        T = notes.frames
+        zs = self.guitar.string_z
+        out = np.zeros((T + 1, 3))
+        out[:, 1] = self.y
+        out[:, 0] = last
+        out[:, 2] = zs + self.hover
+        t = np.arange(T + 1, dtype=float)
+        first = segs[0][0] if segs else T + 1
+        out[t < first, 0] = self.pick0[0]
+        for t0, t1, x0, x1, kind in segs:
+            m = (t >= t0) & (t <= T)
+            u = np.clip((t[m] - t0) / (t1 - t0), 0, 1)
+            out[m, 0] = x0 + min_jerk(u) * (x1 - x0)
+            if kind == "travel":
+                crossing = np.any((self.xs - min(x0, x1) > 1e-6) & (max(x0, x1) - self.xs > 1e-6))
+                out[m, 2] = zs + self.hover + (self.travel - self.hover) * np.sin(np.pi * u) * crossing
+            else:
+                # plateau below the strings around the crossings; ramps in the gaps before / after
+                _, tau_c, h0, h1 = kind
+                ramp = 0.6 * tau_c
+                bump = np.minimum(np.clip(u / ramp, 0, 1), np.clip((1 - u) / ramp, 0, 1))
+                h = np.where(u < 0.5, h0, h1)
+                out[m, 2] = zs + h - (h + self.depth) * min_jerk(bump)
+        before = t < first
+        out[before, 2] = self.pick0[2] + (zs + self.hover - self.pick0[2]) * min_jerk(t[before] / max(first, 1))
+        return out
+
+    # --- inverse kinematics
+    def solve(self, path: np.ndarray) -> np.ndarray:
+        """(T + 1, 27) joint targets putting the pick on `path`, damped least squares warm-started frame to frame."""
+        k = self.kin
+        q = k.home.copy()
+        out = np.empty((len(path), 27))
+        act, W = self.active, np.diag(self.weights)
+        for t, p in enumerate(path):
+            for _ in range(4):
+                k.set(q)
+                e = p - k.site(k.hand.pick)
+                J = k.site_jac(k.hand.pick)[:, act]
+                r = -(W @ W) @ (q[act] - k.home[act])
+                dq = np.linalg.solve(J.T @ J + W @ W, J.T @ e + r)
+                q[act] = np.clip(q[act] + dq, k.lo[act], k.hi[act])
+                if np.linalg.norm(e) < 2e-5:
+                    break
+            out[t] = q
+        return out
+
+    def desired(self, notes: Notes, earliest=None) -> np.ndarray:
+        return self.solve(self.pick_path(notes, earliest))
+
+
+def _min_jerk_inverse(frac):
+    """Time fraction at which the minimum-jerk profile reaches `frac`."""
+    lo, hi = 0.0, 1.0
+    for _ in range(40):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if min_jerk(mid) < frac else (lo, mid)
+    return (lo + hi) / 2
+
+
+# ------------------------------------------------------------------------------------------------- left hand
+
+WRIST_THUMB = np.arange(11)                                    # wrist slides + hinges, thumb (DoF order)
+FINGER_DOFS = [np.arange(11 + 4 * f, 15 + 4 * f) for f in range(4)]
+POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fit_home's rest posture (left)
+
+
+class ScriptedLeft:
+    """The fretting hand: one finger per fret in a hand position covering 4 frets.
+
+    A hand position p (index finger on fret p) is a whole-hand pose with the fingertips hovering over frets p..p+3
+    and the thumb behind the neck; the position moves only when a note leaves it. Per note, each target string gets
+    the finger of its fret, whose tip is put on p_{i,k} with the capsule resting on the fretboard (tip axis at
+    fretboard top + radius, `press_depth` into it so the PD keeps it down): 3 mm from the string, well inside the 6 mm
+    press distance. The other fingers hover `hover` above the strings, over the next place they will press.
+    """
+
+    hover = 0.010           # hovering tip axis above string height (the capsule 4 mm above the string)
+    press_depth = 0.0005    # tip axis below the resting height on the fretboard
+    clearance = 0.0075      # pressing finger's parts from the other strings (soft)
+    lift_frames = 5
+    land_frames = 5
+    shift_frames = 10       # hand position change (the wrist slides are slow: kp 10 on 0.2 kg)
+    start_frames = 10       # from the home pose to the first note's position
+
+    def __init__(self):
+        self.guitar = GUITAR
+        self.kin = HandKinematics("left")
+        self.posture = POSTURE
+        self._positions: dict[int, np.ndarray] = {}
+        self._fingers: dict[tuple, np.ndarray] = {}
+
+    # --- geometry helpers
+    def fret_mid(self, k: int) -> float:
+        return float((self.guitar.fret_y[k] + self.guitar.fret_y[k - 1]) / 2)
+
+    def press_point(self, s: int, k: int, f: int = 0) -> np.ndarray:
+        """Tip target of finger f for string s (0-based) at fret k: on p_{s,k}, its capsule resting on the board."""
+        p = self.guitar.target_points[s, k].copy()
+        p[2] = self.guitar.fretboard_z + H.RADII[H.FINGERS[f]][2] - self.press_depth
+        return p
+
+    def hover_point(self, x: float, k: int) -> np.ndarray:
+        return np.array([x, self.fret_mid(k), self.guitar.string_z + self.hover])
+
+    def mid_x(self, k: int) -> float:
+        y = self.fret_mid(k)
+        return float((self.guitar.string_x(3, y) + self.guitar.string_x(4, y)) / 2)
+
+    # --- inverse kinematics (cached)
+    def position(self, p: int) -> np.ndarray:
+        """27 joint values of hand position p (cached). Solved together with, for every finger, the configurations
+        pressing string 1 and string 6 at its fret, so that every string is within reach from this pose."""
+        if p in self._positions:
+            return self._positions[p]
+        k, hand, g = self.kin, self.kin.hand, self.guitar
+        near = min(self._positions, key=lambda r: abs(r - p), default=None)
+        q0 = k.home if near is None else self._positions[near]
+        frets = [min(p + f, g.n_frets) for f in range(4)]
+
+        def residual(z):
+            q = z[:27]
+            k.set(q)
+            out = [10 * (k.site(hand.tips[f]) - self.hover_point(self.mid_x(frets[f]), frets[f])) for f in range(4)]
+            out.append(10 * (k.site(hand.thumb_tip) - [-0.008 * g.sign, self.fret_mid(frets[1]) + 0.01, -0.02]))
+            for f in range(4):                                # knuckles beside the treble edge, clear of the neck
+                out.append(10 * np.array([max(0.0, 0.04 - g.sign * k.body(hand.segments[f][0])[0])]))
+            out.append(0.02 * (q[6:] - self.posture))
+            out.append(0.02 * (q[3:6] - k.home[3:6]))
+            for j, s in enumerate((0, N_STRINGS - 1)):       # reach: press strings 1 and 6 from this wrist pose
+                for f in range(4):
+                    qq = q.copy()
+                    qq[FINGER_DOFS[f]] = z[27 + 16 * j + 4 * f: 31 + 16 * j + 4 * f]
+                    k.set(qq)
+                    out.append(30 * (k.site(hand.tips[f]) - self.press_point(s, frets[f], f)))
+            return np.concatenate(out)
+
+        z0 = np.concatenate([q0, q0[11:], q0[11:]])
+        lo = np.concatenate([k.lo, k.lo[11:], k.lo[11:]])
+        hi = np.concatenate([k.hi, k.hi[11:], k.hi[11:]])
+        sol = least_squares(residual, np.clip(z0, lo + 1e-6, hi - 1e-6), bounds=(lo, hi), ftol=1e-6, xtol=1e-6)
+        self._positions[p] = sol.x[:27]
+        return self._positions[p]
+
+    def finger(self, f: int, p: int, target: tuple, pressing: bool, string: int = -1) -> np.ndarray:
+        """4 joint values of finger f (0 = index) in position p putting its tip on `target` (rounded to 0.1 mm).
+        A pressing finger keeps its parts `clearance` away from the other strings."""
+        key = (f, p, target, pressing, string)
+        if key in self._fingers:
+            return self._fingers[key]
+        k, hand, g = self.kin, self.kin.hand, self.guitar
+        base = self.position(p).copy()
+        dofs = FINGER_DOFS[f]
+        tip = hand.tips[f]
+        others = [i for i in range(N_STRINGS) if i != string]
+        strings = g.strings
+
+        def residual(x):
+            q = base.copy()
+            q[dofs] = x
+            k.set(q)
+            out = [100 * (k.site(tip) - np.asarray(target))]
+            if pressing:
+                seg = k.segments()[3 * f: 3 * f + 3]
+                gaps = [_clearance(a, b, strings[i, 0], strings[i, 1]) for a, b in seg for i in others]
+                out.append(10 * np.maximum(0.0, self.clearance - np.array(gaps)))
+            out.append(0.01 * (x - self.posture[5 + 4 * f: 9 + 4 * f]))
+            return np.concatenate(out)
+
+        x0 = base[dofs]
+        sol = least_squares(residual, np.clip(x0, k.lo[dofs] + 1e-6, k.hi[dofs] - 1e-6),
+                            bounds=(k.lo[dofs], k.hi[dofs]))
+        self._fingers[key] = sol.x
+        return sol.x
+
+    # --- the schedule
+    def fingering(self, notes: Notes):
+        """Per note: (hand position, {finger: (string, fret)}). One finger per fret; the position moves only when a
+        note leaves it, by the least amount. Chords: fingers by fret (index on the lowest), at one fret the string
+        nearer string 6 first; more than 4 pressed strings keep the 4 lowest frets."""
+        n_frets = self.guitar.n_frets
+        p, out = None, []
+        for i in range(notes.n):
+            goal = notes.left[i]
+            press = sorted(((int(goal[s]), -s) for s in range(N_STRINGS) if goal[s] > 0))[:4]
+            if not press:
+                out.append((p, {}))
+                continue
+            lo, hi = press[0][0], press[-1][0]
+            if p is None:
+                p = max(1, min(lo, hi - 3))
+            elif lo < p:
+                p = lo
+            elif hi > p + 3:
+                p = hi - 3 if hi - lo <= 3 else lo
+            p = min(p, n_frets - 3)
+            fingers, f_prev = {}, -1
+            for j, (k, ms) in enumerate(press):
+                f = max(f_prev + 1, min(k - p, 3 - (len(press) - 1 - j)))
+                fingers[f] = (-ms, k)
+                f_prev = f
+            out.append((p, fingers))
+        first = next((q for q, _ in out if q is not None), 1)
+        filled, last = [], first
+        for q, fingers in out:
+            last = q if q is not None else last
+            filled.append((last, fingers))
+        return filled
+
+    def configs(self, notes: Notes, plan):
+        """Per note: the 27 joint values (wrist and thumb of its position, each finger pressing or hovering over the
+        next place it presses) and, per finger, a via configuration for a same-finger move (or None)."""
+        g = self.guitar
+        out = []
+        for i, (p, fingers) in enumerate(plan):
+            q = self.position(p).copy()
+            vias = [None] * 4
+            for f in range(4):
+                if f in fingers:
+                    s, k = fingers[f]
+                    q[FINGER_DOFS[f]] = self.finger(f, p, _key(self.press_point(s, k, f)), True, s)
+                    if i > 0 and f in plan[i - 1][1] and plan[i - 1][1][f] != (s, k) and plan[i - 1][0] == p:
+                        via = self.hover_point(float(g.target_points[s, k, 0]), k)
+                        via[2] = g.string_z + 0.007
+                        vias[f] = self.finger(f, p, _key(via), False)
+                    continue
+                nxt = next(((plan[j][1][f]) for j in range(i + 1, len(plan))
+                            if plan[j][0] == p and f in plan[j][1]), None)
+                if nxt is None:
+                    target = self.hover_point(self.mid_x(min(p + f, g.n_frets)), min(p + f, g.n_frets))
+                else:
+                    target = self.hover_point(float(g.target_points[nxt[0], nxt[1], 0]), nxt[1])
+                q[FINGER_DOFS[f]] = self.finger(f, p, _key(target), False)
+            out.append((q, vias))
+        return out
+
+    def desired(self, notes: Notes) -> np.ndarray:
+        """(T + 1, 27) joint targets. Row j is the pose after control step j - 1; note i owns rows onset_i + 1 ..
+        onset_{i+1}. Each change is timed against the note boundary tb = onset_i + 0.5: a press that cannot spoil
+        the previous note lands early, one that can lands right after tb; a lift that cannot spoil the next note
+        waits, one that can is released before tb; hand position changes are centred on tb."""
+        plan = self.fingering(notes)
+        cfg = self.configs(notes, plan)
+        T = notes.frames
+        groups = [WRIST_THUMB] + FINGER_DOFS
+        events = [[] for _ in groups]                    # per group: (t0, t1, q_to, via)
+        slides = []                                      # (t0, t1, finger, string, fret from, fret to)
+        for i in range(notes.n):
+            q, vias = cfg[i]
+            tb = notes.onset[i] + 0.5
+            if i == 0:
+                for gi, dofs in enumerate(groups):
+                    events[gi].append((0.0, float(self.start_frames), q[dofs], None))
+                continue
+            q_prev = cfg[i - 1][0]
+            (p_a, f_a), (p_b, f_b) = plan[i - 1], plan[i]
+            goal_a, goal_b = notes.left[i - 1], notes.left[i]
+            if p_a != p_b:
+                w = self.shift_frames
+                for gi, dofs in enumerate(groups):
+                    events[gi].append((tb - w / 2, tb + w / 2, q[dofs], None))
+                for f in set(f_a) & set(f_b):                  # same finger, same string: slide along it
+                    if f_a[f][0] == f_b[f][0]:
+                        slides.append((tb - w / 2, tb + w / 2, f, f_b[f][0], f_a[f][1], f_b[f][1]))
+                continue
+            for f in range(4):
+                dofs = FINGER_DOFS[f]
+                if np.allclose(q[dofs], q_prev[dofs]):
+                    continue
+                a, b = f_a.get(f), f_b.get(f)
+                if a is not None and b is not None:                     # move: lift, travel, press
+                    D = self.lift_frames + 1
+                    t0 = tb - D / 2
+                elif a is not None:                                     # lift
+                    s, k = a
+                    D = self.lift_frames
+                    t0 = tb + 0.5 if _harmless(goal_b, s, k) else tb - 0.5 - 0.4 * D
+                elif b is not None:                                     # land
+                    s, k = b
+                    D = self.land_frames
+                    t0 = tb - 1.5 - D if _harmless(goal_a, s, k) else tb + 1.0 - 0.6 * D
+                else:                                                   # hover somewhere else
+                    D = self.land_frames
+                    t0 = tb - D
+                events[f + 1].append((t0, t0 + D, q[dofs], vias[f]))
+        out = np.empty((T + 1, 27))
+        home = self.kin.home
+        t = np.arange(T + 1, dtype=float)
+        for gi, dofs in enumerate(groups):
+            cur = home[dofs].copy()
+            val = np.tile(cur, (T + 1, 1))
+            free = 0.0
+            for t0, t1, q_to, via in events[gi]:
+                if t0 < free:                                 # never start before the last change ended
+                    t1, t0 = t1 + free - t0, free
+                m = t >= t0
+                if via is None:
+                    s = min_jerk((t[m] - t0) / (t1 - t0))[:, None]
+                    val[m] = cur + s * (q_to - cur)
+                else:
+                    tm = (t0 + t1) / 2
+                    s1 = min_jerk((t[m] - t0) / (tm - t0))[:, None]
+                    s2 = min_jerk((t[m] - tm) / (t1 - tm))[:, None]
+                    val[m] = cur + s1 * (via - cur) + s2 * (q_to - via)
+                cur, free = q_to, t1
+            out[:, dofs] = val
+        for t0, t1, f, s, ka, kb in slides:             # the tip stays on the string while the wrist moves
+            pa, pb = self.press_point(s, ka, f), self.press_point(s, kb, f)
+            x = out[max(int(np.floor(t0)), 0), FINGER_DOFS[f]].copy()
+            for j in range(max(int(np.ceil(t0)), 0), min(int(np.floor(t1)), T) + 1):
+                u = min_jerk((j - t0) / (t1 - t0))
+                x = self.track_tip(f, out[j], pa + u * (pb - pa), x)
+                out[j, FINGER_DOFS[f]] = x
+        return out
+
+    def track_tip(self, f: int, q: np.ndarray, target: np.ndarray, x: np.ndarray, iters: int = 6) -> np.ndarray:
+        """Finger f's 4 joints putting its tip on `target` with the rest of the hand at q (Gauss-Newton)."""
+        k, dofs, tip = self.kin, FINGER_DOFS[f], self.kin.hand.tips[f]
+        q = q.copy()
+        for _ in range(iters):
+            q[dofs] = x
+            k.set(q)
+            e = target - k.site(tip)
+            if np.linalg.norm(e) < 1e-5:
+                break
+            J = k.site_jac(tip)[:, dofs]
+            x = np.clip(x + np.linalg.solve(J.T @ J + 1e-6 * np.eye(4), J.T @ e), k.lo[dofs], k.hi[dofs])
+        return x
+
+
+def _harmless(goal, s: int, k: int) -> bool:
+    """Would a finger at fret k on string s (and, on its way, over string s - 1: fingers come from the string-1 side)
+    leave a note with this left goal unchanged? Yes where the string is free (goal 0) or pressed at a fret >= k
+    (the highest fret wins); never on an open string."""
+    return all(goal[j] == 0 or k <= goal[j] for j in (s - 1, s) if 0 <= j < N_STRINGS)
+
+
+def _key(p) -> tuple:
+    """A cache key for a target point: rounded to 0.1 mm."""
+    return tuple(float(x) for x in np.round(np.asarray(p, float), 4))
+
+
+# ------------------------------------------------------------------------------------------------- the player
+
+SCORE_FIELDS = ("precision", "recall", "f1", "tp", "predicted", "targets")
+
+
+class ScriptedPlayer:
+    """Plans and plays songs of an env's batch with the scripted hands of its roles (left, right or both).
+
+    Each hand is planned and tracked in its own one-hand scene: the hands never touch each other, so the duet's
+    dynamics are the two hands' side by side and the duet action is the two plans concatenated (role order).
+    The left-handed player's scene (`EnvConfig.mirror`) is the exact mirror image of the right-handed one (no
+    gravity, neck and body symmetric in x), so its actions are the right-handed plan mirrored joint by joint.
+    """
+
+    def __init__(self, env):
+        self.env = env
+        self.roles = env.roles
+        self.hands = {r: ScriptedLeft() if r == "left" else ScriptedRight() for r in self.roles}
+        self.trackers = {r: Tracker(r) for r in self.roles}
+        self.flip = {r: H.mirror_qpos(np.ones(H.N_DOF), r) if env.config.mirror else np.ones(H.N_DOF)
+                     for r in self.roles}
+        self._run = None
+
+    def plan(self, window) -> np.ndarray:
+        """(frames, action_size) env actions playing `window` (a `Window`, or `Notes`) from the home pose.
+        With both hands the right hand crosses each note's strings only once the simulated left hand holds the note
+        (the duet's strict gate counts an earlier pick as wrong)."""
+        notes = window if isinstance(window, Notes) else Notes.from_window(window)
+        parts, earliest = {}, None
+        for r in sorted(self.roles):                      # "left" first: its timing gates the right hand
+            if r == "left":
+                ctrl, q = self.trackers[r].track(self.hands[r].desired(notes))
+                if "right" in self.roles:
+                    earliest = self.ready_steps(notes, q)
+            else:
+                ctrl, _ = self.trackers[r].track(self.hands[r].desired(notes, earliest))
+            parts[r] = self.trackers[r].to_action(ctrl)
+        return np.concatenate([parts[r] * self.flip[r] for r in self.roles], axis=1).astype(np.float32)
+
+    def ready_steps(self, notes: Notes, q: np.ndarray) -> np.ndarray:
+        """(n,) per note, the first control step whose simulated left hand holds every string as the note asks
+        (the env's press detection on MuJoCo C states); the note's onset when it never does."""
+        kin, guitar = self.hands["left"].kin, self.hands["left"].guitar
+        segs = []
+        for j in range(1, len(q)):                        # state after step j - 1
+            kin.set(q[j])
+            segs.append(kin.segments())
+        press = np.asarray(jax.vmap(lambda s: detect.pressed_frets(s, guitar))(
+            jnp.asarray(np.array(segs), jnp.float32)))
+        out = notes.onset[:-1].copy()
+        for i in range(notes.n):
+            a, b = notes.onset[i], notes.onset[i + 1]
+            ok = np.asarray(scoring.left_ok(jnp.asarray(press[a:b]), jnp.asarray(notes.left[i]))).all(axis=1)
+            out[i] = a + int(np.argmax(ok)) if ok.any() else a
+        return out
+
+    def rollout(self, songs, actions: np.ndarray):
+        """Roll the env over songs (B,) with actions (B, T, A), vmapped; returns per-step info plus reward,
+        terminated and done (B, T, ...)."""
+        env = self.env
+        if self._run is None:
+            def one(song, acts):
+                state = env.reset(jax.random.PRNGKey(0), song=song)
+
+                def body(s, a):
+                    s = env.step(s, a)
+                    return s, dict(s.info, reward=s.reward, terminated=s.terminated, done=s.done)
+                return jax.lax.scan(body, state, acts)[1]
+            self._run = jax.jit(jax.vmap(one))
+        info = self._run(jnp.asarray(songs, jnp.int32), jnp.asarray(actions, jnp.float32))
+        return jax.tree.map(np.asarray, info)
+
+    def play(self, songs=0) -> list[dict] | dict:
+        """Plan and play song index(es) of the env's batch. Per song: {"frames", "notes", "plan_s", "roll_s",
+        per hand (left / right / both): {"f1", "precision", "recall" (means over notes), "per_note" (n, 6)}}."""
+        single = np.ndim(songs) == 0
+        songs = np.atleast_1d(songs)
+        plans, out = [], []
+        for i in songs:
+            t0 = time.time()
+            window = self.env.sample_window(jax.random.PRNGKey(0), int(i))
+            plans.append(self.plan(window))
+            out.append({"frames": len(plans[-1]), "notes": int(window.n) - 1, "plan_s": time.time() - t0})  # no rest
+        T = max(len(p) for p in plans)
+        acts = np.stack([np.concatenate([p, np.repeat(p[-1:], T - len(p), 0)]) for p in plans])
+        t0 = time.time()
+        info = self.rollout(songs, acts)
+        roll = time.time() - t0
+        hands = [h for h in ("left", "right", "both") if h in self.roles or (h == "both" and len(self.roles) == 2)]
+        for b, res in enumerate(out):
+            end = info["note_end"][b, :res["frames"]] & (info["song_note"][b, :res["frames"]] >= 0)  # song notes
+            res["roll_s"] = roll
+            for h in hands:
+                per = info[h][b, :res["frames"]][end]
+                res[h] = {"per_note": per, **{k: float(per[:, j].mean()) if len(per) else float("nan")
+                                              for j, k in enumerate(SCORE_FIELDS[:3])}}
+            res["closed"] = int(end.sum())
+            term = np.flatnonzero(info["terminated"][b, :res["frames"]])
+            res["terminated_at"] = int(term[0]) if len(term) else None       # a failure would end the episode
+            res["reward"] = info["reward"][b, :res["frames"]]
+        return out[0] if single else out

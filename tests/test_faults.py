@@ -1,0 +1,168 @@
+"""Faults survived and bad input refused (issue #14): non-finite numbers in training, a damaged checkpoint, a run
+directory in use or made with another setup, a kill between a checkpoint and its metrics row, and every command given
+bad paths: one line and exit code 2, never a traceback. The training runs share the tiny left-hand trainer of
+tests/test_learn.py (same program, so the persistent compilation cache serves it)."""
+import json
+import shutil
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from dexguitar.cli import main
+from dexguitar.errors import RunError, TrainingDiverged
+from dexguitar.learn import checkpoint as C
+from dexguitar.learn import run as RUN
+
+
+@pytest.fixture
+def trainer(left_trainer):
+    return left_trainer
+
+
+def poison(tree, value=jnp.nan):
+    """The same pytree with the first number of every float leaf set to `value`."""
+    return jax.tree.map(lambda x: x.reshape(-1).at[0].set(value).reshape(x.shape)
+                        if jnp.issubdtype(x.dtype, jnp.floating) and x.size else x, tree)
+
+
+def finite(tree):
+    return all(bool(np.all(np.isfinite(np.asarray(x)))) for x in jax.tree.leaves(tree)
+               if np.issubdtype(np.asarray(x).dtype, np.floating))
+
+
+def test_an_env_with_nan_physics_is_reset_and_learning_stays_finite(trainer):
+    state = trainer.init()
+    data = state.env.body.data
+    state = state.replace(env=state.env.replace(body=state.env.body.replace(
+        data=data.replace(qvel=data.qvel.at[2, 0].set(jnp.nan)))))         # env 2 of 4 explodes at its next step
+    new, metrics = trainer.make_train_chunk(1)(state, trainer.data)
+    assert float(metrics["nonfinite/env_steps"]) == 1.0                     # found where it arose ...
+    assert float(metrics["nonfinite/state"]) == 0.0
+    assert finite(new.params) and finite(new.env.body.data.qpos)            # ... and contained: nothing else is NaN
+
+
+def test_nonfinite_parameters_roll_back_and_are_never_saved(trainer, tmp_path, monkeypatch):
+    fresh = trainer.init
+    calls = []
+
+    def init_poisoned_once(key=None):
+        calls.append(1)
+        state = fresh(key)
+        return state.replace(params=dict(state.params, policy=poison(state.params["policy"]))) if len(
+            calls) == 1 else state
+    monkeypatch.setattr(trainer, "init", init_poisoned_once)
+    messages = []
+    RUN.train(trainer, tmp_path / "run", iterations=2, progress=False, log=messages.append)
+    assert any("rolled back" in m for m in messages)
+    # every saved step and the export are finite, and the run still reached its iterations
+    steps = C.steps(tmp_path / "run" / "ckpt")
+    assert steps == [2, 1]
+    restored, _ = C.restore(tmp_path / "run" / "ckpt", fresh())
+    assert finite(restored.params) and int(restored.iteration) == 2
+
+
+def test_repeated_nonfinite_parameters_stop_the_run(trainer, tmp_path, monkeypatch):
+    fresh = trainer.init
+    monkeypatch.setattr(trainer, "init", lambda key=None: (lambda s: s.replace(
+        params=dict(s.params, policy=poison(s.params["policy"]))))(fresh(key)))
+    with pytest.raises(TrainingDiverged, match="non-finite"):
+        RUN.train(trainer, tmp_path / "run", iterations=2, progress=False, log=lambda m: None)
+    assert C.steps(tmp_path / "run" / "ckpt") == []                        # nothing non-finite was saved
+
+
+def test_a_damaged_latest_checkpoint_falls_back_to_the_previous_one(tmp_path, capsys):
+    tree = {"a": jnp.arange(4.0), "b": jnp.ones((2, 3))}
+    C.save(tmp_path, 1, tree)
+    C.save(tmp_path, 2, jax.tree.map(lambda x: x + 1, tree))
+    # truncate every data file of step 2 (a disk that filled up, a copy cut short)
+    for f in (tmp_path / "2").rglob("*"):
+        if f.is_file() and f.stat().st_size > 64 and "d" == f.parent.name:
+            f.write_bytes(f.read_bytes()[:16])
+    restored, step = C.restore(tmp_path, jax.tree.map(jnp.zeros_like, tree))
+    assert step == 1 and np.array_equal(restored["a"], np.arange(4.0))
+    assert "step 2 cannot be read" in capsys.readouterr().err
+    shutil.rmtree(tmp_path / "1")
+    with pytest.raises(RunError, match="no intact checkpoint"):
+        C.restore(tmp_path, tree)
+
+
+def test_a_run_directory_in_use_is_refused(tmp_path):
+    held = RUN.RunDir(tmp_path / "run")
+    with pytest.raises(RunError, match="in use by process"):
+        RUN.RunDir(tmp_path / "run")
+    held.close()
+    RUN.RunDir(tmp_path / "run").close()                                  # free again once released
+
+
+def test_metrics_rows_past_the_checkpoint_are_dropped_on_resume(tmp_path):
+    run = RUN.RunDir(tmp_path / "run")
+    run.metrics.write_text("".join(json.dumps({"iteration": i}) + "\n" for i in (1, 2, 3)) + '{"itera')
+    run.truncate_metrics(2)                                               # killed after row 3, before its save
+    assert [json.loads(r)["iteration"] for r in run.metrics.read_text().splitlines()] == [1, 2]
+    run.close()
+
+
+def test_resume_with_another_setup_names_the_differences(tmp_path):
+    run = RUN.RunDir(tmp_path / "run")
+    record = {"train": {"hand": "left", "num_envs": 4, "iterations": 2}, "env": {"shift_prob": 0.5},
+              "songs": ["a"]}
+    with pytest.raises(RunError, match="no run to resume"):
+        run.check_resume(record)
+    run.config.write_text(json.dumps(record))
+    run.check_resume(json.loads(json.dumps(dict(record, train=dict(record["train"], iterations=9)))))  # may grow
+    other = dict(record, train=dict(record["train"], hand="right", num_envs=8), songs=["b"])
+    with pytest.raises(RunError) as err:
+        run.check_resume(other)
+    msg = str(err.value)
+    assert "train.hand: 'left' -> 'right'" in msg and "train.num_envs: 4 -> 8" in msg and "songs" in msg
+    run.close()
+
+
+# ---------------------------------------------------------------------------------------------- the command line
+
+BAD = [
+    ["song", "info", "{tmp}/missing.json"],
+    ["song", "convert", "ode_to_joy", "{tmp}/no/such/dir/x.json"],
+    ["song", "convert", "ode_to_joy", "{tmp}/x.txt"],
+    ["train", "--song", "{tmp}/empty", "--out", "{tmp}/r1", "--config", "experiments/cpu_smoke.py"],
+    ["train", "--song", "{tmp}/mistyped.json", "--out", "{tmp}/r2", "--config", "experiments/cpu_smoke.py"],
+    ["train", "--song", "ode_to_joy", "--out", "{tmp}/r3", "--config", "{tmp}/missing.py"],
+    ["train", "--song", "ode_to_joy", "--out", "{tmp}/r4", "--config", "{tmp}/noconfig.py"],
+    ["train", "--song", "ode_to_joy", "--out", "{tmp}/r5", "--config", "experiments/cpu_smoke.py", "--resume"],
+    ["train", "--song", "ode_to_joy", "--out", "{tmp}/afile", "--config", "experiments/cpu_smoke.py"],
+    ["train", "--song", "ode_to_joy", "--out", "{tmp}/r6", "--config", "experiments/cpu_smoke.py",
+     "--motion", "{tmp}/motion.npz"],
+    ["train", "--song", "ode_to_joy", "--out", "{tmp}/r7", "--config", "experiments/cpu_smoke.py",
+     "--init-from", "{tmp}/nothing"],
+    ["eval", "--ckpt", "{tmp}/nothing", "--song", "ode_to_joy"],
+    ["sync", "--song", "ode_to_joy", "--left", "{tmp}/nothing", "--right", "{tmp}/nothing", "--out", "{tmp}/s1"],
+    ["songs", "{tmp}/missing.json", "--out", "{tmp}/s2"],
+    ["play", "--ckpt", "{tmp}/nothing", "--song", "ode_to_joy", "--out", "{tmp}/p"],
+    ["play", "--left", "models/policies/left_ode_to_joy", "--right", "models/policies/right_mixed", "--song",
+     "{tmp}/missing.gp5", "--out", "{tmp}/p"],
+    ["plot", "{tmp}/nothing", "--out", "{tmp}/p.png"],
+    ["motion", "info", "{tmp}/motion.npz"],
+]
+
+
+@pytest.mark.parametrize("argv", BAD, ids=[" ".join(a[:2]) + f" #{i}" for i, a in enumerate(BAD)])
+def test_every_command_refuses_bad_paths_in_one_line(argv, tmp_path, capsys):
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "noconfig.py").write_text("X = 1\n")
+    (tmp_path / "afile").write_text("not a directory\n")
+    (tmp_path / "motion.npz").write_bytes(b"PK\x03\x04 truncated")
+    argv = [a.format(tmp=tmp_path) for a in argv]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: "), err
+    assert "Traceback" not in err[0]
+
+
+@pytest.mark.parametrize("argv", [["train", "--envs", "0"], ["train", "--iterations", "-1"],
+                                  ["train", "--max-minutes", "0"]])
+def test_impossible_numbers_are_refused_by_the_parser(argv, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(argv + ["--out", "x"])
+    assert exit_.value.code == 2 and "must be" in capsys.readouterr().err
