@@ -196,7 +196,7 @@ and prints the per-note report (F1 per hand; each note right, late or wrong, wit
 `dexguitar sync` run (e.g. `runs/sync-strum` from `synchronize.ipynb`, with `SONG = "strum_g_c_d"`) to hear a
 synchronized pair instead.
 
-Runs on a CPU too (`make demo` is the same command, about 30 s); on Colab a **GPU runtime** makes the rollout
+Runs on a CPU too (`make demo` is the same command); on Colab a **GPU runtime** makes the rollout
 faster, the video is rendered on the CPU either way: about 3–4 minutes in all with the setup.'''),
     ("code", setup("Audio", "Image", "Video")),
     ("md", '''\
@@ -226,8 +226,10 @@ report = json.loads(Path(OUT + "-report.json").read_text())
 files = report["files"]
 if "video" in files:
     display(Video(files["video"], embed=True, width=640))
-else:                                  # no video encoder: a contact sheet of frames
+elif "frames" in files:                # no video encoder: a contact sheet of frames
     display(Image(filename=files["frames"]))
+else:                                  # no offscreen OpenGL: sound and report only
+    print("no picture: this machine has no offscreen OpenGL (apt-get install libosmesa6)")
 display(Audio(filename=files["audio"]))'''),
     ("md", '''\
 ## The per-note report
