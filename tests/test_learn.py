@@ -132,11 +132,10 @@ def trainer(left_trainer):
     return left_trainer
 
 
-def test_training_iterations_and_exact_resume(trainer, tmp_path):
-    chunk = trainer.make_train_chunk(1)
-    start = trainer.init()
+def test_training_iterations_and_exact_resume(trainer, tmp_path, compiled_chunk):
+    chunk, start, data, put = compiled_chunk(trainer, trainer.init())
     p0 = jax.device_get(start.params)
-    first, metrics = chunk(start, trainer.data)
+    first, metrics = chunk(start, data)
     assert all(np.isfinite(float(v)) for k, v in metrics.items() if not k.startswith("f1/"))
     assert all(float(v) == 0.0 for k, v in metrics.items() if k.startswith("nonfinite/"))
     changed = jax.tree.map(lambda a, b: float(np.abs(np.asarray(a) - b).max()), jax.device_get(first.params), p0)
@@ -144,10 +143,10 @@ def test_training_iterations_and_exact_resume(trainer, tmp_path):
         assert max(jax.tree.leaves(changed[net])) > 0, net
     C.save(tmp_path / "ckpt", int(first.iteration), first)
     template = jax.tree.map(jnp.zeros_like, first)          # a fresh process's structure, without building it
-    uninterrupted, _ = chunk(first, trainer.data)
+    uninterrupted, _ = chunk(first, data)
     restored, step = C.restore(tmp_path / "ckpt", template)
     assert int(restored.iteration) == 1 == step
-    resumed, _ = chunk(restored, trainer.data)
+    resumed, _ = chunk(put(restored), data)
     same = jax.tree.map(lambda a, b: np.array_equal(np.asarray(a), np.asarray(b)), resumed, uninterrupted)
     assert all(jax.tree.leaves(same)) and int(resumed.iteration) == 2
 
@@ -159,3 +158,14 @@ def test_weights_follow_the_paper(trainer):
     assert RightEnv.reward_weights == (0.5,) and DISCRIMINATORS["right"]["hand"].weight == 0.5   # Sec. 5.2
     from dexguitar.learn.trainer import TrainConfig
     assert dataclasses.asdict(TrainConfig())["actor_lr"] == 5e-6                            # Table S1
+
+
+def test_actor_warmup_holds_the_actor_still_for_whole_iterations():
+    from dexguitar.learn.trainer import TrainConfig, actor_schedule
+    cfg = TrainConfig(num_envs=4, horizon=4, minibatch=8, epochs=2, actor_lr=1e-3, actor_warmup=3)
+    lr = actor_schedule(cfg)                          # 4 x 4 / 8 = 2 minibatches x 2 epochs = 4 updates an iteration
+    np.testing.assert_allclose([float(lr(c)) for c in (0, 11, 12, 13)], [0.0, 0.0, 1e-3, 1e-3], rtol=1e-6)
+    np.testing.assert_allclose(float(actor_schedule(TrainConfig(actor_lr=1e-3))(0)), 1e-3, rtol=1e-6)  # default: none
+    with pytest.raises(ValueError, match="actor_warmup"):
+        TrainConfig(actor_warmup=-1).check()
+

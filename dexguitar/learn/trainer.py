@@ -54,6 +54,7 @@ class TrainConfig:
     disc_weight: float = -1.0         # per discriminator column; -1 = the discriminator's (`imitation`)
     iterations: int = 100_000         # ~4e8 samples at 4096 per iteration
     iterations_per_call: int = 50     # scanned on the device between host updates
+    actor_warmup: int = 0             # iterations in which only the critic and discriminators learn (warm starts)
     seed: int = 42
 
     @property
@@ -66,6 +67,8 @@ class TrainConfig:
                      "disc_steps", "disc_batch", "disc_buffer"):
             if getattr(self, name) < 1:
                 raise ValueError(f"TrainConfig.{name} must be at least 1, got {getattr(self, name)}")
+        if self.actor_warmup < 0:
+            raise ValueError(f"TrainConfig.actor_warmup must be at least 0, got {self.actor_warmup}")
         if self.minibatch > self.batch:
             raise ValueError(f"TrainConfig.minibatch {self.minibatch} exceeds the batch of {self.num_envs} envs x "
                              f"{self.horizon} steps = {self.batch}")
@@ -78,6 +81,13 @@ class Data:
     songs: TL.Timeline             # a padded batch (`timeline.batch`)
     reference: jnp.ndarray         # (T, 16, 7) reference link poses at 60 Hz, padded
     reference_frames: jnp.ndarray  # int32 (): valid frames of `reference`
+
+
+def actor_schedule(cfg: TrainConfig):
+    """The actor's learning rate per optimizer update: 0 for the first `actor_warmup` iterations (a fresh critic
+    learns the values of a warm-started policy before that policy moves), then `actor_lr`."""
+    updates = cfg.actor_warmup * cfg.epochs * max(cfg.batch // cfg.minibatch, 1)
+    return lambda count: jnp.where(count < updates, 0.0, cfg.actor_lr)
 
 
 @struct.dataclass
@@ -132,7 +142,7 @@ class Trainer:
         self.critic = N.Critic(len(self.columns))
         self.disc = N.Discriminator()
         self.optimizers = {
-            "policy": optax.chain(optax.clip_by_global_norm(config.grad_clip), optax.adam(config.actor_lr)),
+            "policy": optax.chain(optax.clip_by_global_norm(config.grad_clip), optax.adam(actor_schedule(config))),
             "critic": optax.chain(optax.clip_by_global_norm(config.grad_clip), optax.adam(config.critic_lr)),
             "disc": optax.adam(config.disc_lr),
         }
