@@ -46,6 +46,22 @@ def compiles_per_call(compiles, monkeypatch):
 
 
 @pytest.fixture(scope="session")
+def compiled_chunk():
+    """compiled_chunk(trainer, state): one training iteration compiled as `train` compiles it (placed, ahead of
+    time), so that tests calling it directly share `train`'s program through the persistent cache.
+    -> (chunk, state, data, put): the state and data placed, and `put` to place another (restored) state alike."""
+    from dexguitar.learn.devices import Placement
+
+    def build(trainer, state):
+        where = Placement()
+        shardings = where.shardings(state)
+        state, data = where.put(state, shardings), where.put(trainer.data, where.replicated(trainer.data))
+        chunk = trainer.make_train_chunk(1, where).lower(state, data).compile()
+        return chunk, state, data, lambda tree: where.put(tree, shardings)
+    return build
+
+
+@pytest.fixture(scope="session")
 def left_trainer():
     """The tiny left-hand trainer that several test files share (4 envs, one song): one compiled program for all."""
     from dexguitar.learn.trainer import Trainer, TrainConfig

@@ -32,12 +32,13 @@ def finite(tree):
                if np.issubdtype(np.asarray(x).dtype, np.floating))
 
 
-def test_an_env_with_nan_physics_is_reset_and_learning_stays_finite(trainer):
+def test_an_env_with_nan_physics_is_reset_and_learning_stays_finite(trainer, compiled_chunk):
     state = trainer.init()
     data = state.env.body.data
     state = state.replace(env=state.env.replace(body=state.env.body.replace(
         data=data.replace(qvel=data.qvel.at[2, 0].set(jnp.nan)))))         # env 2 of 4 explodes at its next step
-    new, metrics = trainer.make_train_chunk(1)(state, trainer.data)
+    chunk, state, data, _ = compiled_chunk(trainer, state)
+    new, metrics = chunk(state, data)
     assert float(metrics["nonfinite/env_steps"]) == 1.0                     # found where it arose ...
     assert float(metrics["nonfinite/state"]) == 0.0
     assert finite(new.params) and finite(new.env.body.data.qpos)            # ... and contained: nothing else is NaN

@@ -109,15 +109,14 @@ def sync_trainer(pair, tmp_path_factory):
                           *PO.load_pair(base / "left", base / "right"))
 
 
-def test_sync_iteration_trains_only_the_synchronizer_and_resumes_exactly(sync_trainer, tmp_path):
+def test_sync_iteration_trains_only_the_synchronizer_and_resumes_exactly(sync_trainer, tmp_path, compiled_chunk):
     t = sync_trainer
     assert t.columns == tuple(f"string{i}" for i in range(1, 7)) + ("pick", "disc_wrist", "disc_fingers")
     np.testing.assert_allclose(t.weights, [0.15] * 6 + [1.0, 0.05, 0.05])
     assert abs(float(jnp.sum(t.weights)) - 2.0) < 1e-6                  # reference §5.3: they sum to 2
-    chunk = t.make_train_chunk(1)
-    start = t.init()
+    chunk, start, data, put = compiled_chunk(t, t.init())
     p0 = jax.device_get(start.params)
-    first, metrics = chunk(start, t.data)
+    first, metrics = chunk(start, data)
     assert all(np.isfinite(float(v)) for k, v in metrics.items() if not k.startswith("f1/"))
     p1 = jax.device_get(first.params)
     diff = jax.tree.map(lambda a, b: float(np.abs(np.asarray(a) - b).max()), p1, p0)
@@ -127,8 +126,8 @@ def test_sync_iteration_trains_only_the_synchronizer_and_resumes_exactly(sync_tr
     assert p1["critic"]["params"]["value"]["kernel"].shape[-1] == 9
     C.save(tmp_path / "ckpt", int(first.iteration), first)
     template = jax.tree.map(jnp.zeros_like, first)          # a fresh process's structure, without building it
-    uninterrupted, _ = chunk(first, t.data)
-    resumed, _ = chunk(C.restore(tmp_path / "ckpt", template)[0], t.data)
+    uninterrupted, _ = chunk(first, data)
+    resumed, _ = chunk(put(C.restore(tmp_path / "ckpt", template)[0]), data)
     same = jax.tree.map(lambda a, b: np.array_equal(np.asarray(a), np.asarray(b)), resumed, uninterrupted)
     assert all(jax.tree.leaves(same))
 

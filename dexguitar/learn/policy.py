@@ -19,6 +19,7 @@ from pathlib import Path
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from dexguitar.envs.layout import ObsLayout
 from dexguitar.errors import UserError
@@ -122,10 +123,15 @@ def init_synchronizer(key, left: dict, right: dict, layout: ObsLayout):
 
 
 def template(spec: PolicySpec) -> dict:
-    """A parameter pytree of the right structure and shapes (to restore into)."""
+    """A parameter pytree of the right structure and shapes (to restore into): zeros, shaped without running the
+    networks' initializers (which take seconds on a CPU)."""
+    return jax.tree.map(lambda s: np.zeros(s.shape, s.dtype), jax.eval_shape(lambda: _initial(spec)))
+
+
+def _initial(spec: PolicySpec) -> dict:
     layout = spec.layout
     if spec.kind == "synchronizer":
-        hand = template(spec.hand_spec(0))
+        hand = _initial(spec.hand_spec(0))
         policy, norm = init_synchronizer(jax.random.PRNGKey(0), hand, hand, layout)
         return {"policy": policy, "obs_norm": norm}
     return {"policy": N.init_params(N.Policy(spec.action_size), jax.random.PRNGKey(0),
