@@ -141,8 +141,11 @@ class Trainer:
                                    jnp.float32)
         self.critic = N.Critic(len(self.columns))
         self.disc = N.Discriminator()
+        # the schedule (and its step counter in the optimizer state) only with a warm-up: runs without one keep
+        # their checkpoint layout and compiled program
         self.optimizers = {
-            "policy": optax.chain(optax.clip_by_global_norm(config.grad_clip), optax.adam(actor_schedule(config))),
+            "policy": optax.chain(optax.clip_by_global_norm(config.grad_clip),
+                                  optax.adam(actor_schedule(config) if config.actor_warmup else config.actor_lr)),
             "critic": optax.chain(optax.clip_by_global_norm(config.grad_clip), optax.adam(config.critic_lr)),
             "disc": optax.adam(config.disc_lr),
         }
