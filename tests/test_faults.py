@@ -118,6 +118,10 @@ def test_resume_with_another_setup_names_the_differences(tmp_path):
         run.check_resume(other)
     msg = str(err.value)
     assert "train.hand: 'left' -> 'right'" in msg and "train.num_envs: 4 -> 8" in msg and "songs" in msg
+    # a run recorded before a field existed resumes when the field keeps its default, and not otherwise
+    run.check_resume(dict(record, train=dict(record["train"], kl_target=0.0)))
+    with pytest.raises(RunError, match="train.clip: 0.2 -> 0.3"):
+        run.check_resume(dict(record, train=dict(record["train"], clip=0.3)))
     run.close()
 
 

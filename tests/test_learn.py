@@ -49,6 +49,25 @@ def test_clipped_surrogate_by_hand():
     assert float(loss) == pytest.approx(0.15, abs=1e-6) and float(frac) == 1.0
 
 
+def test_approx_kl_estimates_the_kl_of_two_gaussians():
+    # samples of the old policy N(0, 1); the new one N(0.1, 1): KL(old || new) = 0.1^2 / 2 = 0.005
+    x = np.random.default_rng(0).normal(size=400_000)
+    old = -0.5 * x ** 2
+    new = -0.5 * (x - 0.1) ** 2
+    assert abs(float(P.approx_kl(jnp.asarray(new), jnp.asarray(old))) - 0.005) < 2.5e-4
+    assert float(P.approx_kl(jnp.asarray(old), jnp.asarray(old))) == 0.0
+
+
+def test_adaptive_learning_rate_steps_and_bounds():
+    from dexguitar.learn.trainer import KL_LR_BOUNDS, TrainConfig, adapt_lr
+    steps = [float(adapt_lr(jnp.float32(1e-3), kl, 0.01)) for kl in (0.05, 0.02, 0.01, 0.005, 0.001)]
+    np.testing.assert_allclose(steps, [1e-3 / 1.5, 1e-3, 1e-3, 1e-3, 1.5e-3], rtol=1e-6)
+    assert float(adapt_lr(jnp.float32(KL_LR_BOUNDS[1]), 0.0, 0.01)) == pytest.approx(KL_LR_BOUNDS[1])
+    assert float(adapt_lr(jnp.float32(KL_LR_BOUNDS[0]), 1.0, 0.01)) == pytest.approx(KL_LR_BOUNDS[0])
+    with pytest.raises(ValueError, match="kl_target"):
+        TrainConfig(kl_target=-0.01).check()
+
+
 def test_popart_statistics_and_preserved_outputs():
     stats = P.popart_init(1)
     # identity before any update
@@ -149,6 +168,38 @@ def test_training_iterations_and_exact_resume(trainer, tmp_path, compiled_chunk)
     resumed, _ = chunk(put(restored), data)
     same = jax.tree.map(lambda a, b: np.array_equal(np.asarray(a), np.asarray(b)), resumed, uninterrupted)
     assert all(jax.tree.leaves(same)) and int(resumed.iteration) == 2
+
+
+def test_kl_target_adapts_the_actor_rate_inside_the_update(trainer):
+    from types import SimpleNamespace
+    from dexguitar.learn.policy import distribution
+    from dexguitar.learn.trainer import Trainer
+    cfg = dataclasses.replace(trainer.config, kl_target=1e-9, actor_lr=1e-3)
+    tr = Trainer(cfg, trainer.env.songs, None)
+    k = jax.random.split(jax.random.PRNGKey(3), 4)
+    policy, obs_norm, _ = tr.init_policy(k[0])
+    lay = tr.layout
+    critic = N.init_params(tr.critic, k[1], (lay.history, lay.frame_size), (lay.goal_size + lay.privileged,))
+    params = {"policy": policy, "critic": critic}
+    opt = {name: tr.optimizers[name].init(params[name]) for name in ("policy", "critic")}
+    opt["lr"] = jnp.float32(1e-3)
+    n = cfg.batch
+    obs = jax.random.normal(k[2], (n, lay.obs_size))
+    action = jax.random.normal(k[3], (n, tr.env.action_size)) * 0.1
+    mu, log_std = distribution(tr.spec, tr.actor_params(params, obs_norm), obs)
+    batch = {"obs": obs, "privileged": jnp.zeros((n, lay.privileged)), "action": action,
+             "logp": N.gaussian_log_prob(mu, log_std, action),          # the acting policy's: the first KL is 0
+             "adv": jnp.ones((n, len(tr.columns))), "target": jnp.zeros((n, len(tr.columns)))}
+    update = jax.jit(lambda p, o, b: tr.ppo_update(SimpleNamespace(params=p, opt=o, obs_norm=obs_norm,
+                                                                   iteration=jnp.int32(0)), b, jax.random.PRNGKey(0)))
+    new_params, new_opt, log = update(params, opt, batch)
+    updates = cfg.epochs * (n // cfg.minibatch)                              # 2 x 2 = 4 minibatch steps
+    moved = max(jax.tree.leaves(jax.tree.map(lambda a, b: float(jnp.abs(a - b).max()),
+                                             new_params["policy"], params["policy"])))
+    # the first step (KL 0) raises the rate by 1.5, every later one (KL > 2e-9 once the actor moved) lowers it
+    assert moved > 0.0
+    np.testing.assert_allclose(float(new_opt["lr"]), 1e-3 * 1.5 / 1.5 ** (updates - 1), rtol=1e-5)
+    assert float(log["kl"]) >= 0.0 and "actor_lr" in log
 
 
 def test_weights_follow_the_paper(trainer):

@@ -40,6 +40,12 @@ def policy_loss(log_prob, old_log_prob, weighted_adv, clip: float):
     return -jnp.mean(jnp.sum(surrogate, axis=-1)), jnp.mean(jnp.abs(ratio - 1.0) > clip)
 
 
+def approx_kl(log_prob, old_log_prob):
+    """KL(old || new) estimated from the samples' log-ratios, r - 1 - log r (never negative, low variance)."""
+    log_ratio = log_prob - old_log_prob
+    return jnp.mean(jnp.expm1(log_ratio) - log_ratio)
+
+
 # ------------------------------------------------------------------------------------------------ PopArt
 
 def popart_init(columns: int):

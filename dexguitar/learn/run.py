@@ -32,6 +32,7 @@ SUMMED = ("episodes", "terminations")      # counts (and notes/*, nonfinite/*); 
 STOP_CALLS = 3                             # host calls a training F1 must hold for `stop_f1`
 MAX_ROLLBACKS = 3                          # non-finite states in a row before giving up
 RESUME_FREE = ("iterations", "iterations_per_call")   # may change on --resume; nothing else may
+TRAIN_DEFAULTS = {f.name: f.default for f in dataclasses.fields(TrainConfig)}
 
 
 def compilation_cache(directory=None) -> Path:
@@ -115,9 +116,9 @@ class RunDir:
         diffs = []
         for key in sorted(set(old) | set(record)):
             a, b = old.get(key), record.get(key)
-            if key == "train":
-                a = {k: v for k, v in (a or {}).items() if k not in RESUME_FREE}
-                b = {k: v for k, v in (b or {}).items() if k not in RESUME_FREE}
+            if key == "train":   # a field newer than the run counts as its default
+                a, b = ({k: v for k, v in {**TRAIN_DEFAULTS, **(x or {})}.items() if k not in RESUME_FREE}
+                        for x in (a, b))
                 diffs += [f"train.{k}: {a.get(k)!r} -> {b.get(k)!r}" for k in sorted(set(a) | set(b))
                           if a.get(k) != b.get(k)]
             elif key == "env" and a != b:

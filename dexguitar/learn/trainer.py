@@ -55,6 +55,8 @@ class TrainConfig:
     iterations: int = 100_000         # ~4e8 samples at 4096 per iteration
     iterations_per_call: int = 50     # scanned on the device between host updates
     actor_warmup: int = 0             # iterations in which only the critic and discriminators learn (warm starts)
+    log_std_init: float = -2.3        # initial log std of the actions: std 0.1 of a half range (reference §5)
+    kl_target: float = 0.0            # > 0: the actor's learning rate adapts to hold this KL per minibatch step
     seed: int = 42
 
     @property
@@ -69,6 +71,8 @@ class TrainConfig:
                 raise ValueError(f"TrainConfig.{name} must be at least 1, got {getattr(self, name)}")
         if self.actor_warmup < 0:
             raise ValueError(f"TrainConfig.actor_warmup must be at least 0, got {self.actor_warmup}")
+        if self.kl_target < 0:
+            raise ValueError(f"TrainConfig.kl_target must be at least 0, got {self.kl_target}")
         if self.minibatch > self.batch:
             raise ValueError(f"TrainConfig.minibatch {self.minibatch} exceeds the batch of {self.num_envs} envs x "
                              f"{self.horizon} steps = {self.batch}")
@@ -81,6 +85,16 @@ class Data:
     songs: TL.Timeline             # a padded batch (`timeline.batch`)
     reference: jnp.ndarray         # (T, 16, 7) reference link poses at 60 Hz, padded
     reference_frames: jnp.ndarray  # int32 (): valid frames of `reference`
+
+
+KL_LR_BOUNDS = (1e-6, 1e-2)           # the adaptive actor learning rate stays within these
+
+
+def adapt_lr(lr, kl, target: float):
+    """The adaptive learning rate's step: /1.5 when the policy moved more than twice the KL target, x1.5 when less
+    than half of it (the schedule of massively parallel PPO, e.g. Rudin et al. 2022)."""
+    lr = jnp.where(kl > 2.0 * target, lr / 1.5, jnp.where(kl < 0.5 * target, lr * 1.5, lr))
+    return jnp.clip(lr, *KL_LR_BOUNDS)
 
 
 def actor_schedule(cfg: TrainConfig):
@@ -141,11 +155,17 @@ class Trainer:
                                    jnp.float32)
         self.critic = N.Critic(len(self.columns))
         self.disc = N.Discriminator()
-        # the schedule (and its step counter in the optimizer state) only with a warm-up: runs without one keep
-        # their checkpoint layout and compiled program
+        # The schedule (and its step counter in the optimizer state) only with a warm-up: runs without one keep
+        # their checkpoint layout and compiled program. With a KL target the actor's step is Adam's direction times
+        # a learning rate kept in the state (`opt["lr"]`).
+        if config.kl_target:
+            actor = optax.chain(optax.clip_by_global_norm(config.grad_clip), optax.scale_by_adam(),
+                                optax.scale(-1.0))
+        else:
+            actor = optax.chain(optax.clip_by_global_norm(config.grad_clip),
+                                optax.adam(actor_schedule(config) if config.actor_warmup else config.actor_lr))
         self.optimizers = {
-            "policy": optax.chain(optax.clip_by_global_norm(config.grad_clip),
-                                  optax.adam(actor_schedule(config) if config.actor_warmup else config.actor_lr)),
+            "policy": actor,
             "critic": optax.chain(optax.clip_by_global_norm(config.grad_clip), optax.adam(config.critic_lr)),
             "disc": optax.adam(config.disc_lr),
         }
@@ -170,6 +190,8 @@ class Trainer:
         if frozen is not None:
             params["frozen"] = frozen
         opt = {k: self.optimizers[k].init(params[k]) for k in self.optimizers}
+        if cfg.kl_target:
+            opt["lr"] = jnp.float32(cfg.actor_lr)
         env_state = jax.jit(jax.vmap(self.env.reset))(jax.random.split(k_env, cfg.num_envs))
         # Envs start at random ages, so their time-outs spread over the episode instead of all of them restarting
         # from the home pose together every `episode_frames` steps.
@@ -185,7 +207,8 @@ class Trainer:
     # ------------------------------------------------------------------------------------------ pieces
     def init_policy(self, key):
         """(trainable policy parameters, observation normalizer, frozen parameters or None)."""
-        return (N.init_params(N.Policy(self.env.action_size), key, (self.layout.history, self.layout.frame_size),
+        policy = N.Policy(self.env.action_size, self.config.log_std_init)
+        return (N.init_params(policy, key, (self.layout.history, self.layout.frame_size),
                               (self.layout.goal_size,)),
                 N.normalizer_init(self.layout.frame_size), None)
 
@@ -281,6 +304,7 @@ class Trainer:
             v = self.value(params["critic"], obs_norm, mb["obs"], mb["privileged"])
             vl = jnp.mean(jnp.sum((v - mb["target"]) ** 2, -1)) / v.shape[-1]
             return pl + cfg.value_coef * vl, {"policy_loss": pl, "value_loss": vl, "clip_frac": clipped,
+                                              "kl": ppo.approx_kl(logp, mb["logp"]),
                                               "std": jnp.mean(jnp.exp(log_std))}
 
         def epoch(carry, k):
@@ -293,6 +317,12 @@ class Trainer:
                 new_params, new_opt = dict(params), dict(opt)
                 for name in ("policy", "critic"):
                     updates, new_opt[name] = self.optimizers[name].update(grads[name], opt[name], params[name])
+                    if name == "policy" and cfg.kl_target:
+                        # the KL of this minibatch before its step sets the step's rate (held at 0 in a warm-up)
+                        new_opt["lr"] = adapt_lr(opt["lr"], log["kl"], cfg.kl_target)
+                        rate = jnp.where(ts.iteration < cfg.actor_warmup, 0.0, new_opt["lr"])
+                        updates = jax.tree.map(lambda u: rate * u, updates)
+                        log = dict(log, actor_lr=new_opt["lr"])
                     new_params[name] = optax.apply_updates(params[name], updates)
                 ok = finite(grads)
                 carry = jax.tree.map(lambda new, old: jnp.where(ok, new, old), (new_params, new_opt),
@@ -301,7 +331,7 @@ class Trainer:
             return jax.lax.scan(minibatch, carry, perm)
 
         params = {"policy": ts.params["policy"], "critic": ts.params["critic"]}
-        opt = {"policy": ts.opt["policy"], "critic": ts.opt["critic"]}
+        opt = {k: v for k, v in ts.opt.items() if k != "disc"}
         (params, opt), log = jax.lax.scan(epoch, (params, opt), jax.random.split(key, cfg.epochs))
         skipped = jnp.sum(log.pop("skipped"))
         return params, opt, dict(jax.tree.map(jnp.mean, log), **{"nonfinite/ppo_updates": skipped})
@@ -356,7 +386,7 @@ class Trainer:
         metrics.update(disc_log)
         new = ts.replace(
             params=dict(ts.params, policy=params["policy"], critic=params["critic"], disc=disc_params),
-            opt={"policy": opt["policy"], "critic": opt["critic"], "disc": disc_opt},
+            opt=dict(opt, disc=disc_opt),
             obs_norm=obs_norm, disc_norm=disc_norm, popart=popart, buffers=buffers, env=env_state, key=key,
             iteration=ts.iteration + 1)
         metrics["nonfinite/state"] = 1.0 - finite((new.params, new.opt, new.obs_norm, new.popart)).astype(
