@@ -31,7 +31,6 @@ $(STAMP): pyproject.toml
 setup: $(STAMP)                ## make the virtual environment and install the package
 
 demo: $(STAMP)                 ## the main job: the shipped synchronized policies play a song -> out/demo.mp4, .wav, report
-	$(BIN)/dexguitar song list
 	$(BIN)/dexguitar play --ckpt models/policies/sync_strum_g_c_d --song strum_g_c_d --out out/demo --caption
 
 test: $(STAMP)                 ## the CPU test suite

@@ -154,7 +154,6 @@ class GuitarEnv:
         self._jnt_lo = jnp.asarray(self.model.jnt_range[:, 0], jnp.float32)
         self._jnt_hi = jnp.asarray(self.model.jnt_range[:, 1], jnp.float32)
         self._contact_pairs = self._pick_contacts()
-        self.layout = self._layout()
 
     def bind(self, songs: TL.Timeline) -> "GuitarEnv":
         """This env over other songs of the same capacities (e.g. traced arguments of a jitted function)."""
@@ -175,8 +174,10 @@ class GuitarEnv:
     def window_capacity(self) -> int:
         return int(self.songs.left.shape[-2]) + 1 if self.config.sequential else self.config.window_notes[1] + 1
 
-    def _layout(self) -> ObsLayout:
-        """The observation layout, from the shapes `reset` produces."""
+    @functools.cached_property
+    def layout(self) -> ObsLayout:
+        """The observation layout, from the shapes `reset` produces (traced on first use: a player that only
+        rolls out does without it)."""
         state = jax.eval_shape(self.reset, jax.random.PRNGKey(0))
         goals = [jax.eval_shape(functools.partial(self.hand_goal, role), state.cursor, state.picking)
                  for role in self.roles]

@@ -70,7 +70,8 @@ def play(song, params, spec: PO.PolicySpec, *, seconds: float | None = None, env
     if not env.config.sequential:
         raise ValueError("play needs an evaluation config (EnvConfig().evaluation()): whole songs from the start")
     key = jax.random.PRNGKey(0) if key is None else key
-    window = jax.device_get(env.sample_window(key, 0))      # sequential: no randomness, the rows reset() plays
+    # sequential: no randomness, the rows reset() plays (one small program rather than dozens of eager ones)
+    window = jax.device_get(jax.jit(env.sample_window, static_argnums=1)(key, 0))
     rows = int(window.n)
     dur = np.asarray(window.dur)[:rows]
     onset = np.concatenate([[0], np.cumsum(dur)])
