@@ -55,7 +55,7 @@ class TrainConfig:
     iterations: int = 100_000         # ~4e8 samples at 4096 per iteration
     iterations_per_call: int = 50     # scanned on the device between host updates
     actor_warmup: int = 0             # iterations in which only the critic and discriminators learn (warm starts)
-    log_std_init: float = -2.3        # initial log std of the actions: std 0.1 of a half range (reference §5)
+    log_std_init: float = -2.3        # initial log std of the actions: std 0.1 of a half range (reference §7.1)
     kl_target: float = 0.0            # > 0: the actor's learning rate adapts to hold this KL per minibatch step
     seed: int = 42
 
