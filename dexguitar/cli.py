@@ -187,6 +187,7 @@ def _sync(args) -> int:
 def _songs(args) -> int:
     recipe = pipeline.Recipe(**{k: v for k, v in {
         "left_config": args.config_left, "right_config": args.config_right, "sync_config": args.config_sync,
+        "left_init": None if args.left_init == "none" else args.left_init,
         "right_init": args.right_init, "left_minutes": args.left_minutes, "right_minutes": args.right_minutes,
         "sync_minutes": args.sync_minutes, "stop_f1": args.stop_f1, "iterations": args.iterations,
         "envs": args.envs}.items() if v is not None})
@@ -367,6 +368,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--config-left")
     p.add_argument("--config-right")
     p.add_argument("--config-sync")
+    p.add_argument("--left-init", help="the left-hand policy to start from (default models/policies/left_official15; "
+                   "'none' with --config-left experiments/left_songs.py: from scratch)")
     p.add_argument("--right-init", help="the right-hand policy to start from (default models/policies/right_mixed)")
     p.add_argument("--envs", type=positive, help="override every stage's num_envs")
     p.add_argument("--iterations", type=positive, help="cap every stage's iterations")

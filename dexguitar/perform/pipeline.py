@@ -3,7 +3,8 @@
 Stages, per group of songs (all the songs together by default, or each song alone with `per_song`):
 
   left    a left-hand policy trained on the group's songs as written (no fret shift, no tempo change: the authors'
-          song-specific recipe, reference §3.4)
+          song-specific recipe, reference §3.4), warm-started from `left_init` (default: the shipped left hand of the
+          15 official songs; None: from scratch with `experiments/left_songs.py`)
   right   the general right hand (`right_mixed`) trained further on the group's picking, as written
   sync    a synchronizer of the two on the group's songs (paper Sec. 4)
   eval    every song of the group by the paper's rules: each hand alone, both before and after synchronization
@@ -40,9 +41,10 @@ STAGES = ("left", "right", "sync")
 class Recipe:
     """How each stage trains. Minutes are wall time on the device, compilation included."""
 
-    left_config: str = str(ROOT / "experiments" / "left_songs.py")
+    left_config: str = str(ROOT / "experiments" / "left_finetune.py")
     right_config: str = str(ROOT / "experiments" / "right_songs.py")
-    sync_config: str = str(ROOT / "experiments" / "sync_gpu.py")
+    sync_config: str = str(ROOT / "experiments" / "sync_songs.py")
+    left_init: str | None = str(ROOT / "models" / "policies" / "left_official15")
     right_init: str = str(ROOT / "models" / "policies" / "right_mixed")
     left_minutes: float = 3.0
     right_minutes: float = 2.0
@@ -113,7 +115,8 @@ class Songbook:
             trainer = Trainer(cfg, timelines, reference_frames(load_motion(hand)), env_cfg)
         if left > 0:
             summary = train(trainer, run_dir, iterations=cfg.iterations, resume=resume, meta=meta,
-                            max_minutes=left, init_from=r.right_init if stage == "right" and not resume else None,
+                            max_minutes=left, init_from=None if resume else {"left": r.left_init,
+                                                                             "right": r.right_init}.get(stage),
                             stop_f1=r.stop_f1, log=self.log)
             self.log(f"[{self.group}] {stage}: {summary.get('samples', 0):,} samples, training F1 "
                      + " ".join(f"{k[3:]} {v:.3f}" for k, v in summary.items() if k.startswith("f1/") and v == v))
