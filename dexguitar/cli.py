@@ -15,6 +15,7 @@ code (2). Anything else is a bug and keeps its traceback.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -187,10 +188,11 @@ def _sync(args) -> int:
 def _songs(args) -> int:
     recipe = pipeline.Recipe(**{k: v for k, v in {
         "left_config": args.config_left, "right_config": args.config_right, "sync_config": args.config_sync,
-        "left_init": None if args.left_init == "none" else args.left_init,
-        "right_init": args.right_init, "left_minutes": args.left_minutes, "right_minutes": args.right_minutes,
+        "left_init": args.left_init, "right_init": args.right_init, "left_minutes": args.left_minutes, "right_minutes": args.right_minutes,
         "sync_minutes": args.sync_minutes, "stop_f1": args.stop_f1, "iterations": args.iterations,
         "envs": args.envs}.items() if v is not None})
+    if args.left_init == "none":
+        recipe = dataclasses.replace(recipe, left_init=None)
     rows = pipeline.run_songs(args.tabs, args.out, recipe, per_song=args.per_song)
     print((Path(args.out) / "songs.md").read_text())
     return 0 if rows else 1

@@ -10,6 +10,8 @@ import pytest
 CACHE = Path(os.environ.get("DEXGUITAR_TEST_CACHE", Path(__file__).resolve().parent.parent / ".cache" / "xla"))
 jax.config.update("jax_compilation_cache_dir", str(CACHE))
 jax.config.update("jax_persistent_cache_min_compile_time_secs", 2.0)
+# the commands that tests call (`cli.main`) set their own cache from DEXGUITAR_CACHE: the same one
+os.environ["DEXGUITAR_CACHE"] = str(CACHE)
 
 
 COMPILES = []          # one entry per XLA compilation (JAX's own event), for the compile-once tests

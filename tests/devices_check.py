@@ -1,6 +1,7 @@
 """Data-parallel training on forced CPU devices (run by tests/test_devices.py in its own process, because the device
 count is fixed when JAX starts): one iteration on 1 and on 4 devices from the same state, then a run saved on 4
-devices resumed on 2. Prints one JSON line."""
+devices resumed on 1 (the one-device program of the first comparison again: two compilations, not three). Prints one
+JSON line."""
 import json
 import sys
 from pathlib import Path
@@ -35,7 +36,7 @@ diff = max(float(np.max(np.abs(np.asarray(a) - np.asarray(b))))
 moved = max(float(np.max(np.abs(np.asarray(a) - np.asarray(b))))
             for a, b in zip(jax.tree.leaves(params[1]), jax.tree.leaves(state.params)))
 first = train(trainer, out_dir, iterations=1, devices=4, progress=False, log=lambda m: None)
-second = train(trainer, out_dir, iterations=2, devices=2, resume=True, progress=False, log=lambda m: None)
+second = train(trainer, out_dir, iterations=2, devices=1, resume=True, progress=False, log=lambda m: None)
 rows = [json.loads(r) for r in (out_dir / "metrics.jsonl").read_text().splitlines()]
 print(json.dumps({"devices": len(jax.devices()), "max_diff": diff, "moved": moved,
                   "iterations": [r["iteration"] for r in rows], "second": second["iteration"]}))

@@ -1,6 +1,6 @@
 """Data parallelism (issue #12) on 4 forced CPU devices, in a process of its own (tests/devices_check.py): one
 iteration on 4 devices equals the one-device iteration up to the order of float sums, and a run saved on 4 devices
-resumes on 2."""
+resumes on 1."""
 import json
 import os
 import subprocess
@@ -11,7 +11,7 @@ ROOT = Path(__file__).resolve().parents[1]
 CACHE = Path(os.environ.get("DEXGUITAR_TEST_CACHE", ROOT / ".cache" / "xla"))      # as tests/conftest.py
 
 
-def test_four_devices_match_one_and_resume_on_two(tmp_path):
+def test_four_devices_match_one_and_a_four_device_run_resumes_on_one(tmp_path):
     env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=4", JAX_PLATFORMS="cpu")
     done = subprocess.run([sys.executable, str(ROOT / "tests" / "devices_check.py"), str(CACHE), str(tmp_path / "run")],
                           env=env, cwd=ROOT, capture_output=True, text=True, timeout=1500)

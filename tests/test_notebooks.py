@@ -26,7 +26,8 @@ def cells(name: str, kind: str = "code") -> list[str]:
 def run_notebook(name: str, out: Path, timeout: float = 600) -> subprocess.CompletedProcess:
     code = "\n\n".join(cells(name))
     env = dict(os.environ, DEXGUITAR_NOTEBOOK_TINY="1", DEXGUITAR_NOTEBOOK_OUT=str(out), JAX_PLATFORMS="cpu",
-               JAX_COMPILATION_CACHE_DIR=str(CACHE), JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS="2")
+               JAX_COMPILATION_CACHE_DIR=str(CACHE), JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS="2",
+               DEXGUITAR_CACHE=str(CACHE))          # the commands' own cache setting (cli.compilation_cache)
     t0 = time.perf_counter()
     proc = subprocess.run([sys.executable, "-c", code], check=False, cwd=ROOT, env=env, capture_output=True,
                           text=True, timeout=timeout)

@@ -67,3 +67,18 @@ def test_an_interrupted_stage_resumes_with_the_minutes_it_has_left_and_a_done_on
     assert recorder.calls == [{"stage": "left", "resume": True, "minutes": pytest.approx(2.0), "init_from": None}]
     book.run("left")
     assert len(recorder.calls) == 1
+
+
+@pytest.mark.parametrize("flag, expected", [([], P.Recipe().left_init), (["--left-init", "none"], None),
+                                            (["--left-init", "my/left"], "my/left")])
+def test_the_songs_command_passes_the_left_start_on(flag, expected, monkeypatch, tmp_path):
+    from dexguitar import cli
+    seen = {}
+
+    def fake_run_songs(tabs, out, recipe, per_song):
+        seen["recipe"] = recipe
+        (tmp_path / "songs.md").write_text("")
+        return [{}]
+    monkeypatch.setattr(cli.pipeline, "run_songs", fake_run_songs)
+    assert cli.main(["songs", "ode_to_joy", "--out", str(tmp_path)] + flag) == 0
+    assert seen["recipe"].left_init == expected
