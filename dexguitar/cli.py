@@ -188,7 +188,8 @@ def _sync(args) -> int:
 def _songs(args) -> int:
     recipe = pipeline.Recipe(**{k: v for k, v in {
         "left_config": args.config_left, "right_config": args.config_right, "sync_config": args.config_sync,
-        "left_init": args.left_init, "right_init": args.right_init, "left_minutes": args.left_minutes, "right_minutes": args.right_minutes,
+        "left_init": args.left_init, "right_init": args.right_init, "left_minutes": args.left_minutes,
+        "right_minutes": args.right_minutes,
         "sync_minutes": args.sync_minutes, "stop_f1": args.stop_f1, "iterations": args.iterations,
         "envs": args.envs}.items() if v is not None})
     if args.left_init == "none":
