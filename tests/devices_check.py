@@ -1,6 +1,6 @@
 """Data-parallel training on forced CPU devices (run by tests/test_devices.py in its own process, because the device
 count is fixed when JAX starts): one iteration on 1 and on 4 devices from the same state, then a run saved on 4
-devices resumed on 1 (the one-device program of the first comparison again: two compilations, not three). Prints one
+devices resumed on 1 (the one-device program of the first comparison again: two programs, not three). Prints one
 JSON line."""
 import json
 import sys
