@@ -1,7 +1,10 @@
-"""The sweep's starting point: experiments/left_songs.py as it was before the sweep (PPO clip 0.2, the paper's)."""
-from dexguitar.envs import EnvConfig
-from dexguitar.learn.trainer import TrainConfig
+"""The sweep's starting point: experiments/left_songs.py as it was before the sweep (left_gpu.py on the songs as
+written, PPO clip 0.2, the paper's)."""
+import os
+import runpy
 
-CONFIG = TrainConfig(hand="left", num_envs=4096, horizon=8, minibatch=4096, epochs=5, actor_lr=1e-4,
-                     critic_lr=3e-4, disc_lr=1e-4, disc_steps=8, iterations=1_000_000, iterations_per_call=25)
+from dexguitar.envs import EnvConfig
+
+_gpu = runpy.run_path(os.path.join(os.path.dirname(__file__), "..", "left_gpu.py"))
+CONFIG = _gpu["CONFIG"]
 ENV = EnvConfig(shift_prob=0.0, tempo_prob=0.0)
