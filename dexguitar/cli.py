@@ -190,7 +190,8 @@ def _songs(args) -> int:
         "left_config": args.config_left, "right_config": args.config_right, "sync_config": args.config_sync,
         "left_init": args.left_init, "right_init": args.right_init, "left_minutes": args.left_minutes,
         "right_minutes": args.right_minutes,
-        "sync_minutes": args.sync_minutes, "stop_f1": args.stop_f1, "iterations": args.iterations,
+        "sync_minutes": args.sync_minutes, "left_target": args.left_target, "right_target": args.right_target,
+        "sync_target": args.sync_target, "iterations": args.iterations,
         "envs": args.envs}.items() if v is not None})
     if args.left_init == "none":
         recipe = dataclasses.replace(recipe, left_init=None)
@@ -367,7 +368,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--left-minutes", type=positive_float)
     p.add_argument("--right-minutes", type=positive_float)
     p.add_argument("--sync-minutes", type=positive_float)
-    p.add_argument("--stop-f1", type=float, help="end a stage early once its training F1 holds this")
+    for stage in pipeline.STAGES:
+        p.add_argument(f"--{stage}-target", type=positive_float, help=f"end the {stage} stage once its best export "
+                       f"plays this F1 on the songs (deterministic, whole songs; default "
+                       f"{getattr(pipeline.Recipe, stage + '_target')})")
     p.add_argument("--config-left")
     p.add_argument("--config-right")
     p.add_argument("--config-sync")

@@ -1,5 +1,6 @@
 """`dexguitar songs` (perform/pipeline.py): which policy each stage starts from, the minutes a resumed stage has left,
-and that finished stages are skipped. Training itself is replaced by a recorder, so nothing compiles here."""
+that finished stages are skipped, and how the judge keeps the best export. Training and playing are replaced by
+recorders, so nothing compiles here."""
 import json
 
 import pytest
@@ -13,7 +14,7 @@ class Recorder:
     def __init__(self):
         self.calls = []
 
-    def __call__(self, trainer, run_dir, iterations, resume, meta, max_minutes, init_from, stop_f1, log):
+    def __call__(self, trainer, run_dir, iterations, resume, meta, max_minutes, init_from, on_call, log):
         self.calls.append({"stage": run_dir.name, "resume": resume, "minutes": max_minutes, "init_from": init_from})
         run_dir.mkdir(parents=True, exist_ok=True)
         (run_dir / "config.json").write_text("{}")
@@ -82,3 +83,83 @@ def test_the_songs_command_passes_the_left_start_on(flag, expected, monkeypatch,
     monkeypatch.setattr(cli.pipeline, "run_songs", fake_run_songs)
     assert cli.main(["songs", "ode_to_joy", "--out", str(tmp_path)] + flag) == 0
     assert seen["recipe"].left_init == expected
+
+
+class Exports:
+    """Stands in for loading and writing exports: an export is its policy.json; the parameters are its meta."""
+
+    def __init__(self, monkeypatch):
+        monkeypatch.setattr(P.PO, "load", lambda d: (json.loads((d / "policy.json").read_text()),) * 2)
+        monkeypatch.setattr(P.PO, "export", self.export)
+        monkeypatch.setattr(P.PO, "unsynchronized", lambda params: dict(params, dz="zero"))
+
+    @staticmethod
+    def export(directory, params, meta):
+        directory.mkdir(parents=True)
+        (directory / "policy.json").write_text(json.dumps(dict(meta, dz=params.get("dz"))))
+
+
+def judge_with(monkeypatch, run, scores: dict, kind="policy", target=0.95, every_s=0.0):
+    """A judge whose F1 of an export is scores[(iteration, dz)]."""
+    Exports(monkeypatch)
+    monkeypatch.setattr(P.Judge, "score", lambda self, params, meta: scores[(params["iteration"], params.get("dz"))])
+    run.mkdir(parents=True, exist_ok=True)
+    return P.Judge(run, songs=[], target=target, every_s=every_s, log=lambda m: None), kind
+
+
+def write_export(run, iteration, kind):
+    (run / "policy").mkdir(parents=True, exist_ok=True)
+    (run / "policy" / "policy.json").write_text(json.dumps({"iteration": iteration, "kind": kind}))
+
+
+def test_the_judge_keeps_the_best_export_and_stops_at_the_target(monkeypatch, tmp_path):
+    run = tmp_path / "left"
+    judge, kind = judge_with(monkeypatch, run, {(25, None): 0.5, (50, None): 0.9, (75, None): 0.7,
+                                                (100, None): 0.96})
+    write_export(run, 25, kind)
+    assert P.best_export(run) == run / "policy"            # nothing judged yet: the last export
+    stops = []
+    for it in (25, 50, 75):
+        write_export(run, it, kind)
+        stops.append(judge(it))
+    assert stops == [False, False, False]
+    assert json.loads((run / "best" / "policy.json").read_text())["iteration"] == 50
+    assert P.best_export(run) == run / "best"
+    write_export(run, 100, kind)
+    assert judge(100) is True                              # 0.96 >= 0.95
+    state = json.loads((run / "judge.json").read_text())
+    assert [h["iteration"] for h in state["history"]] == [25, 50, 75, 100]
+    assert state["best"] == {"iteration": 100, "f1": 0.96}
+    # a resumed stage knows its best, and an iteration already judged is not played again
+    again = P.Judge(run, songs=[], target=0.95, every_s=0.0, log=lambda m: None)
+    assert again.reached() and again(100) and len(again.state["history"]) == 4
+
+
+def test_the_judge_waits_between_judgements_unless_forced(monkeypatch, tmp_path):
+    run = tmp_path / "left"
+    judge, kind = judge_with(monkeypatch, run, {(25, None): 0.5, (50, None): 0.6}, every_s=3600.0)
+    write_export(run, 25, kind)
+    assert judge(25) is False and not (run / "judge.json").exists()   # not yet an hour
+    assert judge(25, force=True) is False
+    assert json.loads((run / "judge.json").read_text())["best"]["iteration"] == 25
+
+
+def test_a_synchronizer_that_plays_worse_than_the_pair_alone_is_not_kept(monkeypatch, tmp_path):
+    run = tmp_path / "sync"
+    judge, kind = judge_with(monkeypatch, run, {(25, "zero"): 0.94, (25, None): 0.90, (50, None): 0.92},
+                             kind="synchronizer")
+    for it in (25, 50):
+        write_export(run, it, kind)
+        judge(it)
+    best = json.loads((run / "best" / "policy.json").read_text())
+    assert best["unsynchronized"] is True and best["dz"] == "zero"
+    assert [(h["iteration"], h["f1"]) for h in judge.state["history"]] == [
+        ("unsynchronized", 0.94), (25, 0.90), (50, 0.92)]
+
+
+def test_the_minutes_of_a_stage_count_its_judgements(tmp_path):
+    run = tmp_path / "left"
+    run.mkdir()
+    (run / "metrics.jsonl").write_text(json.dumps({"seconds": 30.0, "compile_s": 15.0}) + "\n")
+    (run / "judge.json").write_text(json.dumps({"best": None, "history": [], "seconds": 15.0}))
+    assert P._spent(run) == pytest.approx(1.0)

@@ -29,7 +29,6 @@ from dexguitar.learn.devices import Placement
 from dexguitar.learn.trainer import Trainer, TrainConfig
 
 SUMMED = ("episodes", "terminations")      # counts (and notes/*, nonfinite/*); f1/* are sums over notes
-STOP_CALLS = 3                             # host calls a training F1 must hold for `stop_f1`
 MAX_ROLLBACKS = 3                          # non-finite states in a row before giving up
 RESUME_FREE = ("iterations", "iterations_per_call")   # may change on --resume; nothing else may
 TRAIN_DEFAULTS = {f.name: f.default for f in dataclasses.fields(TrainConfig)}
@@ -164,11 +163,11 @@ def export(trainer: Trainer, state, directory) -> None:
 
 def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, progress: bool = True,
           meta: dict | None = None, stop_after_calls: int | None = None, max_minutes: float | None = None,
-          init_from=None, stop_f1: float | None = None, devices: int | None = None, log=None) -> dict:
+          init_from=None, on_call=None, devices: int | None = None, log=None) -> dict:
     """Run until `iterations` iterations are done (counting those of a resumed run), `max_minutes` have passed, or
-    the training F1 of the trained hand ("both" for a duet) has been at least `stop_f1` in the last
-    `STOP_CALLS` host calls. Returns the last summary, with `compile_s` (the first call's compilation) and `calls`.
-    `devices`: how many devices share the envs (default: all)."""
+    `on_call(iteration)`, called after each host call's export, returns True (the pipeline judges the export there).
+    Returns the last summary, with `compile_s` (the first call's compilation) and `calls`. `devices`: how many
+    devices share the envs (default: all)."""
     cfg = trainer.config
     where = Placement(devices)
     if cfg.num_envs % where.n or cfg.minibatch % where.n:
@@ -206,12 +205,12 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
             log(f"{where.n} devices: {cfg.num_envs // where.n} envs and minibatches of {cfg.minibatch // where.n} "
                 f"samples each")
         return _loop(trainer, run, where, where.put(state, shardings), iterations,
-                     progress and where.main, stop_after_calls, max_minutes, stop_f1, log)
+                     progress and where.main, stop_after_calls, max_minutes, on_call, log)
     finally:
         run.close()
 
 
-def _loop(trainer, run, where, state, iterations, progress, stop_after_calls, max_minutes, stop_f1, log) -> dict:
+def _loop(trainer, run, where, state, iterations, progress, stop_after_calls, max_minutes, on_call, log) -> dict:
     cfg = trainer.config
     n = cfg.iterations_per_call
     if int(state.iteration) >= iterations:
@@ -227,8 +226,7 @@ def _loop(trainer, run, where, state, iterations, progress, stop_after_calls, ma
         from tqdm import tqdm          # noqa: PLC0415 - only for a progress display
         bar = tqdm(total=iterations, initial=int(state.iteration), unit="it", dynamic_ncols=True, file=sys.stderr,
                    mininterval=0.1 if sys.stderr.isatty() else 30.0)     # a log file gets a line every 30 s
-    summary, calls, rollbacks, recent = {}, 0, 0, []
-    watched = "f1/" + ("both" if cfg.hand == "duet" else cfg.hand)
+    summary, calls, rollbacks = {}, 0, 0
     while int(state.iteration) < iterations:
         t0 = time.perf_counter()
         new, metrics = chunk(state, data)
@@ -268,10 +266,7 @@ def _loop(trainer, run, where, state, iterations, progress, stop_after_calls, ma
             bar.update(n)
         if stop_after_calls is not None and calls >= stop_after_calls:
             break
-        recent = (recent + [summary.get(watched, float("nan"))])[-STOP_CALLS:]
-        if stop_f1 is not None and len(recent) == STOP_CALLS and min(recent) >= stop_f1:
-            log(f"stopping at iteration {it}: training {watched} {min(recent):.3f} >= {stop_f1} in the last "
-                f"{STOP_CALLS} calls")
+        if on_call is not None and where.main and on_call(it):
             break
         if max_minutes is not None and time.perf_counter() - t_start > 60 * max_minutes:
             log(f"stopping after {max_minutes} minutes at iteration {it} (resume with --resume)")

@@ -11,16 +11,25 @@ Stages, per group of songs (all the songs together by default, or each song alon
 
 Each stage is a run directory under `<out>/<group>/`; a stage that was interrupted resumes from its checkpoint with
 the minutes it has left, and a finished one is skipped (`stages.json`). One row per song goes to `<out>/songs.json`
-and `<out>/songs.md`. A stage can stop early once its training F1 (on the songs themselves, since nothing is
-augmented) has reached `stop_f1` over the last three host calls.
+and `<out>/songs.md`.
+
+A `Judge` plays the group's songs with each stage's export every half minute or so, by the paper's rules (the mean
+action, whole songs), keeps the best export in `<stage>/best/` and ends the stage once that reaches the stage's
+target. The training F1 cannot serve for this: it is measured with the exploration noise on (0.78 on a song that
+the same synchronizer plays at 0.92 deterministically), and synchronization can raise it while the deterministic F1
+falls. The unsynchronized pair is a candidate of the synchronization stage too, so synchronizing never leaves a pair
+worse than it played alone.
 """
 from __future__ import annotations
 
 import dataclasses
 import json
+import shutil
 import sys
 import time
 from pathlib import Path
+
+import numpy as np
 
 from dexguitar.errors import UserError
 from dexguitar.learn import policy as PO
@@ -49,7 +58,10 @@ class Recipe:
     left_minutes: float = 3.0
     right_minutes: float = 2.0
     sync_minutes: float = 5.0
-    stop_f1: float | None = None       # stop a stage once its training F1 reaches this (None: use the minutes)
+    left_target: float = 0.98          # end a stage once its best export plays this F1 (its hand; "both" for sync)
+    right_target: float = 0.98
+    sync_target: float = 0.97
+    judge_seconds: float = 30.0        # training time between two judgements
     iterations: int | None = None      # cap every stage's iterations (tests)
     envs: int | None = None            # override every config's num_envs
 
@@ -59,11 +71,69 @@ def song_name(path) -> str:
 
 
 def _spent(run: Path) -> float:
-    """Minutes a stage has trained so far: its host calls plus the compilation of each process."""
+    """Minutes a stage has spent so far: its host calls, the compilation of each process and its judgements."""
     rows = [json.loads(r) for r in (run / "metrics.jsonl").read_text().splitlines() if r.strip()] if (
         run / "metrics.jsonl").exists() else []
     compiles = {r.get("compile_s", 0.0) for r in rows}
-    return (sum(r.get("seconds", 0.0) for r in rows) + sum(compiles)) / 60.0
+    judged = json.loads((run / Judge.FILE).read_text())["seconds"] if (run / Judge.FILE).exists() else 0.0
+    return (sum(r.get("seconds", 0.0) for r in rows) + sum(compiles) + judged) / 60.0
+
+
+def best_export(run: Path) -> Path:
+    """The export a stage hands on: its judged best, else its last."""
+    return run / "best" if (run / "best" / "policy.json").exists() else PO.export_dir(run)
+
+
+class Judge:
+    """Deterministic whole-song F1 of a stage's export (the mean of its hand's F1 over the group's songs; "both" for a
+    synchronizer), at most every `every_s` seconds. Keeps the best export in `<run>/best/` and its history in
+    `judge.json`; returns True (stop) once the best reaches `target`."""
+
+    FILE = "judge.json"
+
+    def __init__(self, run: Path, songs, target: float, every_s: float, log):
+        self.run, self.songs, self.target, self.every_s, self.log = Path(run), songs, target, every_s, log
+        path = self.run / self.FILE
+        self.state = json.loads(path.read_text()) if path.exists() else {"best": None, "history": [],
+                                                                         "seconds": 0.0}
+        self.last = time.perf_counter()
+
+    def score(self, params, meta: dict) -> float:
+        spec = PO.PolicySpec.from_meta(meta)
+        hand = "both" if spec.kind == "synchronizer" else spec.hand
+        results = evaluate(params, spec, self.songs)
+        return float(np.nanmean([r["summary"][hand]["f1"] for r in results.values()]))
+
+    def __call__(self, iteration: int, force: bool = False) -> bool:
+        done = [h["iteration"] for h in self.state["history"]]
+        if (not force and time.perf_counter() - self.last < self.every_s) or iteration in done:
+            return self.reached()
+        t0 = time.perf_counter()
+        params, meta = PO.load(self.run / "policy")
+        candidates = [(iteration, params, meta)]
+        if meta.get("kind") == "synchronizer" and not done:        # the pair as it plays alone
+            candidates.insert(0, ("unsynchronized", PO.unsynchronized(params), dict(meta, unsynchronized=True)))
+        for it, p, m in candidates:
+            f1 = self.score(p, m)
+            self.state["history"].append({"iteration": it, "f1": f1})
+            if self.state["best"] is None or f1 > self.state["best"]["f1"]:
+                tmp = self.run / "best.tmp"
+                shutil.rmtree(tmp, ignore_errors=True)
+                PO.export(tmp, p, m)
+                shutil.rmtree(self.run / "best", ignore_errors=True)
+                tmp.rename(self.run / "best")
+                self.state["best"] = {"iteration": it, "f1": f1}
+            self.log(f"  judged {self.run.name} at {it}: F1 {f1:.3f} (best {self.state['best']['f1']:.3f} at "
+                     f"{self.state['best']['iteration']})")
+        self.state["seconds"] += time.perf_counter() - t0
+        tmp = self.run / (self.FILE + ".tmp")
+        tmp.write_text(json.dumps(self.state, indent=1))
+        tmp.replace(self.run / self.FILE)
+        self.last = time.perf_counter()
+        return self.reached()
+
+    def reached(self) -> bool:
+        return self.state["best"] is not None and self.state["best"]["f1"] >= self.target
 
 
 class Songbook:
@@ -94,6 +164,7 @@ class Songbook:
             return
         r = self.recipe
         minutes = {"left": r.left_minutes, "right": r.right_minutes, "sync": r.sync_minutes}[stage]
+        target = {"left": r.left_target, "right": r.right_target, "sync": r.sync_target}[stage]
         run_dir = self.dir / stage
         spent = _spent(run_dir)
         left = max(minutes - spent, 0.0)
@@ -107,19 +178,24 @@ class Songbook:
         resume = (run_dir / "config.json").exists()
         meta = {"songs": [s.title for s in self.songs]}
         if stage == "sync":
-            pair = PO.load_pair(self.dir / "left", self.dir / "right")
+            pair = PO.load_pair(best_export(self.dir / "left"), best_export(self.dir / "right"))
             motion = load_motion("left")
             trainer = SyncTrainer(cfg, timelines, reference_frames(motion), *pair, env_cfg)
             meta.update(left=str(self.dir / "left"), right=str(self.dir / "right"))
         else:
             trainer = Trainer(cfg, timelines, reference_frames(load_motion(hand)), env_cfg)
-        if left > 0:
+        judge = Judge(run_dir, self.songs, target, r.judge_seconds, self.log)
+        if left > 0 and not judge.reached():
             summary = train(trainer, run_dir, iterations=cfg.iterations, resume=resume, meta=meta,
                             max_minutes=left, init_from=None if resume else {"left": r.left_init,
                                                                              "right": r.right_init}.get(stage),
-                            stop_f1=r.stop_f1, log=self.log)
+                            on_call=judge, log=self.log)
+            if "iteration" in summary:              # the last export, if the judge has not seen it yet
+                judge(summary["iteration"], force=True)
             self.log(f"[{self.group}] {stage}: {summary.get('samples', 0):,} samples, training F1 "
-                     + " ".join(f"{k[3:]} {v:.3f}" for k, v in summary.items() if k.startswith("f1/") and v == v))
+                     + " ".join(f"{k[3:]} {v:.3f}" for k, v in summary.items() if k.startswith("f1/") and v == v)
+                     + (f"; best export F1 {judge.state['best']['f1']:.3f} at {judge.state['best']['iteration']}"
+                        if judge.state["best"] else ""))
         self.state.setdefault("done", {})[stage] = {"minutes": _spent(run_dir)}
         self._save()
 
@@ -127,9 +203,7 @@ class Songbook:
         """One row per song: F1 of each hand alone, both before and after synchronization."""
         if "eval" in self.state:
             return self.state["eval"]
-        left = PO.load(self.dir / "left")
-        right = PO.load(self.dir / "right")
-        sync = PO.load(self.dir / "sync")
+        left, right, sync = (PO.load(best_export(self.dir / s)) for s in STAGES)
         alone = {h: evaluate(p, PO.PolicySpec.from_meta(m), self.songs) for h, (p, m) in
                  (("left", left), ("right", right))}
         staged = evaluate_synchronizer(sync[0], PO.PolicySpec.from_meta(sync[1]), self.songs)
@@ -142,6 +216,7 @@ class Songbook:
                          "both_before": before["both"]["f1"], "both_after": after["both"]["f1"],
                          "left_after": after["left"]["f1"], "right_after": after["right"]["f1"],
                          "gpu_minutes": round(minutes / len(self.songs), 2),
+                         "synchronized": not sync[1].get("unsynchronized", False),
                          "trained_on": [song_name(p) for p in self.paths]})
             self.log(f"[{self.group}] {rows[-1]['song']}: left {rows[-1]['left']:.3f} right {rows[-1]['right']:.3f} "
                      f"both {rows[-1]['both_before']:.3f} -> {rows[-1]['both_after']:.3f}")
@@ -176,6 +251,6 @@ def write_table(rows: list[dict], out) -> None:
              "|---|---:|---:|---:|---:|---:|---:|---:|---|"]
     for r in rows:
         lines.append(f"| `{r['song']}` | {r['left']:.3f} | {r['right']:.3f} | {r['both_before']:.3f} | "
-                     f"**{r['both_after']:.3f}** | {r['left_after']:.3f} | {r['right_after']:.3f} | "
+                     f"**{r['both_after']:.3f}**{'' if r.get('synchronized', True) else ' (alone)'} | {r['left_after']:.3f} | {r['right_after']:.3f} | "
                      f"{r['gpu_minutes']:.2f} | {len(r['trained_on'])} song(s) |")
     (out / "songs.md").write_text("\n".join(lines) + "\n")
