@@ -187,6 +187,11 @@ def hand_made_performance():
     rec["press"][70:95, 1] = 1                                       # note 2: picked at frame 2, pressed at 5
     rec["picks"][67, 1] = True
     rec["both"][94], rec["right"][94], rec["left"][94] = zero, zero, perfect
+    # as the env reports them: each note judged within itself at its end ("both_now"), and its final verdict at the
+    # next note's end ("both"; note 1's hold does not run on: string 2 is released at frame 65)
+    ends = onset[1:] - 1
+    rec["both_now"], rec["both"] = rec["both"], np.zeros_like(rec["both"])
+    rec["both"][ends[1:]] = rec["both_now"][ends[:-1]]
     return song, rec
 
 

@@ -146,15 +146,21 @@ def test_energy_terms():
 
 # ------------------------------------------------------------------------------------------------ metrics
 
-def run_note(goal, presses, picks=None, errors=None, targets=None):
-    tally = M.empty_tally()
+def run_note(goal, presses, picks=None, errors=None, targets=None, tally=None, both="both_now"):
+    """The scores of one note ("both" is this note judged within itself unless both="both"), or with
+    `tally=True` (scores, the next note's tally)."""
+    want_tally, carry = tally is True, tally is not None and tally is not True
+    tally = tally if carry else M.empty_tally()
     goal = jnp.asarray(goal)
     for t, press in enumerate(presses):
         pk = None if picks is None else jnp.asarray(picks[t], bool)
         er = None if errors is None else jnp.asarray(errors[t], bool)
         tally = M.update(tally, jnp.asarray(press), goal, pk, er)
-    return {k: np.asarray(v) for k, v in M.close(tally, len(presses), goal,
-                                                    None if targets is None else jnp.asarray(targets)).items()}
+    scores, fresh = M.close(tally, len(presses), goal, None if targets is None else jnp.asarray(targets))
+    scores = {k: np.asarray(v) for k, v in scores.items()}
+    if "both" in scores:
+        scores = dict(scores, both=scores[both], previous=scores["both"])
+    return (scores, fresh) if carry or want_tally else scores
 
 
 def test_left_needs_two_thirds_continuous():
@@ -206,3 +212,40 @@ def test_both_hands_need_the_press_at_the_pick_and_after():
 def test_a_rest_played_as_a_rest_is_perfect():
     s = run_note([0] * 6, [[0] * 6] * 5, [[0] * 6] * 5, None, [False] * 6)
     assert s["left"][2] == s["right"][2] == s["both"][2] == 1.0
+
+
+def test_the_hold_after_a_late_pick_runs_on_into_the_next_note():
+    """Rule (3): the press must be kept for 2/3 of the note's duration after the pick, wherever the note ends. A
+    9-frame note of string 2 at fret 5 (need 6 frames), picked at its frame 5: 4 frames of hold inside it."""
+    goal, targets = [0, 5, 0, 0, 0, 0], [False, True, False, False, False, False]
+    on, off, idle = [0, 5, 0, 0, 0, 0], [0] * 6, [[0] * 6]
+    picks = idle * 5 + [[0, 1, 0, 0, 0, 0]] + idle * 3
+    first, tally = run_note(goal, [on] * 9, picks, None, targets, tally=True)
+    assert first["right"][2] == 1.0 and first["both"][2] == 0.0        # within the note: 4 < 6
+    assert np.asarray(tally.prev_need).tolist() == [0, 2, 0, 0, 0, 0]     # 6 - 4 frames still to hold
+    # the same chord again: still pressed for its first 2 frames -> the first note was right after all
+    second = run_note(goal, [on] * 9, idle * 9, None, [False] * 6, tally=tally, both="both")[0]
+    assert second["previous"][:3].tolist() == [1.0, 1.0, 1.0]
+    # released after 1 frame of the next note: 5 < 6 frames after the pick -> wrong
+    second = run_note(goal, [on] + [off] * 8, idle * 9, None, [False] * 6, tally=tally)[0]
+    assert second["previous"][:3].tolist() == [0.0, 0.0, 0.0]
+    # the next note asks for another fret on that string: keeping fret 5 for 2 more frames still counts
+    second = run_note([0, 7, 0, 0, 0, 0], [on] * 2 + [[0, 7, 0, 0, 0, 0]] * 7, idle * 9, None, [False] * 6,
+                      tally=tally)[0]
+    assert second["previous"][2] == 1.0 and second["left"][2] == 1.0       # fret 7 held 7 of 9 frames
+
+
+def test_a_note_with_nothing_open_is_final_at_its_end_and_the_first_note_has_no_previous():
+    goal, targets = [0, 5, 0, 0, 0, 0], [False, True, False, False, False, False]
+    on, idle = [0, 5, 0, 0, 0, 0], [[0] * 6]
+    s, tally = run_note(goal, [on] * 9, [[0, 1, 0, 0, 0, 0]] + idle * 8, None, targets, tally=True)
+    assert s["both"][2] == 1.0 and s["previous"][3:].tolist() == [0, 0, 0]   # no note before: no counts
+    assert np.asarray(tally.prev_need).sum() == 0 and np.asarray(tally.prev_tp).tolist()[1]
+    nxt = run_note(goal, [[0] * 6] * 9, idle * 9, None, [False] * 6, tally=tally)[0]
+    assert nxt["previous"][:3].tolist() == [1.0, 1.0, 1.0]                   # released at once: already final
+
+
+def test_per_note_both_shifts_the_verdicts_to_their_notes():
+    both = np.array([[9.0], [1.0], [2.0]])        # at the ends of notes 0, 1, 2: the verdicts of -, 0, 1
+    now = np.array([[7.0], [8.0], [3.0]])         # note 2 is the last: its own verdict
+    assert M.per_note_both(both, now)[:, 0].tolist() == [1.0, 2.0, 3.0]

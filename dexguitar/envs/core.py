@@ -273,7 +273,7 @@ class GuitarEnv:
         z = jnp.zeros(6, jnp.float32)
         return {"press": jnp.zeros(N_STRINGS, jnp.int32), "picks": jnp.zeros(N_STRINGS, bool),
                 "note_end": jnp.bool_(False), "song": jnp.int32(0), "song_note": jnp.int32(0),
-                "nonfinite": jnp.bool_(False), "left": z, "right": z, "both": z}
+                "nonfinite": jnp.bool_(False), "left": z, "right": z, "both": z, "both_now": z}
 
     def action_to_ctrl(self, action):
         """PD targets: a = 0 holds the home pose, a = +-1 moves a joint by half its range, clipped to the range.
@@ -303,10 +303,10 @@ class GuitarEnv:
         info.update(press=task.press, picks=task.picks, note_end=note_end & ~state.cursor.over,
                     song=state.cursor.window.song, song_note=state.cursor.window.first + state.cursor.note - 1,
                     nonfinite=nonfinite)
-        scores = scoring.close(tally, dur, goal_left, targets if self.picks else None)
+        scores, fresh = scoring.close(tally, dur, goal_left, targets if self.picks else None)
         for hand, value in scores.items():
             info[hand] = jnp.where(info["note_end"], value, 0.0)
-        tally = jax.tree.map(lambda a, b: jnp.where(note_end, a, b), scoring.empty_tally(), tally)
+        tally = jax.tree.map(lambda a, b: jnp.where(note_end, a, b), fresh, tally)
         picking = jax.tree.map(lambda fresh, kept: jnp.where(note_end, fresh, kept),
                                task.picking.replace(done=jnp.zeros(N_STRINGS, bool),
                                                     clean=jnp.ones(N_STRINGS, bool)), task.picking)

@@ -686,6 +686,8 @@ class ScriptedPlayer:
             res["roll_s"] = roll
             for h in hands:
                 per = info[h][b, :res["frames"]][end]
+                if h == "both":     # the end of note k+1 holds note k's final verdict (scoring.close)
+                    per = scoring.per_note_both(per, info["both_now"][b, :res["frames"]][end])
                 res[h] = {"per_note": per, **{k: float(per[:, j].mean()) if len(per) else float("nan")
                                               for j, k in enumerate(SCORE_FIELDS[:3])}}
             res["closed"] = int(end.sum())

@@ -16,6 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from dexguitar import envs as E
+from dexguitar.envs.scoring import per_note_both
 from dexguitar.learn.policy import PolicySpec, act_fn, unsynchronized
 from dexguitar.music import timeline as TL
 
@@ -32,8 +33,12 @@ def rollout_notes(env, act, params, song_index, key, hands):
         state, scores, ended = carry
         nxt = env.step(state, act(params, state.obs)[0])
         row, end = state.cursor.note, nxt.info["note_end"]
-        value = jnp.stack([nxt.info[h] for h in hands])
+        # this note's scores ("both" judged within the note: final only for the last note) ...
+        value = jnp.stack([nxt.info["both_now" if h == "both" else h] for h in hands])
         scores = scores.at[row].set(jnp.where(end, value, scores[row]))
+        if "both" in hands:     # ... and the previous note's final both-hands verdict (scoring.close)
+            b, prev = hands.index("both"), jnp.maximum(row - 1, 0)
+            scores = scores.at[prev, b].set(jnp.where(end & (row > 0), nxt.info["both"], scores[prev, b]))
         return nxt, scores, ended.at[row].set(ended[row] | end)
     state = env.reset(key, song_index)
     carry = (state, jnp.zeros((W, len(hands), 6), jnp.float32), jnp.zeros(W, bool))
@@ -61,6 +66,11 @@ def rollout_song(env, act, song_index: int, frames: int, key=None):
 def note_scores(info, song, hands) -> list[dict]:
     """One row per finished note of a per-step recording (`rollout_song`): as `note_rows`."""
     ends = np.asarray(info["note_end"])
+    info = dict(info)
+    if "both" in hands:         # the end of note k+1 holds note k's final both-hands verdict (scoring.close)
+        both = np.zeros_like(np.asarray(info["both"]))
+        both[ends] = per_note_both(np.asarray(info["both"])[ends], np.asarray(info["both_now"])[ends])
+        info["both"] = both
     rows = []
     for t in np.flatnonzero(ends):
         i = int(np.asarray(info["song_note"])[t])           # -1: the grace rest before the song
