@@ -12,7 +12,8 @@ CACHE = Path(os.environ.get("DEXGUITAR_TEST_CACHE", ROOT / ".cache" / "xla"))   
 
 
 def test_four_devices_match_one_and_a_four_device_run_resumes_on_one(tmp_path):
-    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=4", JAX_PLATFORMS="cpu")
+    flags = (os.environ.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=4").strip()  # + conftest's
+    env = dict(os.environ, XLA_FLAGS=flags, JAX_PLATFORMS="cpu")
     done = subprocess.run([sys.executable, str(ROOT / "tests" / "devices_check.py"), str(CACHE), str(tmp_path / "run")],
                           env=env, cwd=ROOT, capture_output=True, text=True, timeout=1500)
     assert done.returncode == 0, done.stderr[-3000:]
