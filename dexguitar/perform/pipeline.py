@@ -79,6 +79,13 @@ def _spent(run: Path) -> float:
     return (sum(r.get("seconds", 0.0) for r in rows) + sum(compiles) + judged) / 60.0
 
 
+def _write_json(path: Path, obj) -> None:
+    """Write `obj` to `path` whole or not at all (a kill mid-write leaves the previous file)."""
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(obj, indent=1))
+    tmp.replace(path)
+
+
 def best_export(run: Path) -> Path:
     """The export a stage hands on: its judged best, else its last."""
     return run / "best" if (run / "best" / "policy.json").exists() else PO.export_dir(run)
@@ -126,9 +133,7 @@ class Judge:
             self.log(f"  judged {self.run.name} at {it}: F1 {f1:.3f} (best {self.state['best']['f1']:.3f} at "
                      f"{self.state['best']['iteration']})")
         self.state["seconds"] += time.perf_counter() - t0
-        tmp = self.run / (self.FILE + ".tmp")
-        tmp.write_text(json.dumps(self.state, indent=1))
-        tmp.replace(self.run / self.FILE)
+        _write_json(self.run / self.FILE, self.state)
         self.last = time.perf_counter()
         return self.reached()
 
@@ -154,9 +159,7 @@ class Songbook:
         self.state["songs"] = self.paths
 
     def _save(self):
-        tmp = self.state_file.with_suffix(".tmp")
-        tmp.write_text(json.dumps(self.state, indent=2))
-        tmp.replace(self.state_file)
+        _write_json(self.state_file, self.state)
 
     def run(self, stage: str) -> None:
         if stage in self.state.get("done", {}):
@@ -250,7 +253,8 @@ def write_table(rows: list[dict], out) -> None:
     lines = ["| song | left | right | both before | both after | left after | right after | GPU min | trained on |",
              "|---|---:|---:|---:|---:|---:|---:|---:|---|"]
     for r in rows:
+        alone = "" if r.get("synchronized", True) else " (alone)"        # the synchronizer was not kept
         lines.append(f"| `{r['song']}` | {r['left']:.3f} | {r['right']:.3f} | {r['both_before']:.3f} | "
-                     f"**{r['both_after']:.3f}**{'' if r.get('synchronized', True) else ' (alone)'} | {r['left_after']:.3f} | {r['right_after']:.3f} | "
+                     f"**{r['both_after']:.3f}**{alone} | {r['left_after']:.3f} | {r['right_after']:.3f} | "
                      f"{r['gpu_minutes']:.2f} | {len(r['trained_on'])} song(s) |")
     (out / "songs.md").write_text("\n".join(lines) + "\n")
