@@ -191,7 +191,7 @@ def _songs(args) -> int:
         "left_init": args.left_init, "right_init": args.right_init, "left_minutes": args.left_minutes,
         "right_minutes": args.right_minutes,
         "sync_minutes": args.sync_minutes, "left_target": args.left_target, "right_target": args.right_target,
-        "sync_target": args.sync_target, "iterations": args.iterations,
+        "sync_target": args.sync_target, "judge_seconds": args.judge_seconds, "iterations": args.iterations,
         "envs": args.envs}.items() if v is not None})
     if args.left_init == "none":
         recipe = dataclasses.replace(recipe, left_init=None)
@@ -372,6 +372,8 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument(f"--{stage}-target", type=positive_float, help=f"end the {stage} stage once its best export "
                        f"plays this F1 on the songs (deterministic, whole songs; default "
                        f"{getattr(pipeline.Recipe, stage + '_target')})")
+    p.add_argument("--judge-seconds", type=positive_float, help="training time between two judgements of a stage's "
+                   f"export (default {pipeline.Recipe.judge_seconds:g})")
     p.add_argument("--config-left")
     p.add_argument("--config-right")
     p.add_argument("--config-sync")

@@ -157,6 +157,16 @@ def test_a_synchronizer_that_plays_worse_than_the_pair_alone_is_not_kept(monkeyp
         ("unsynchronized", 0.94), (25, 0.90), (50, 0.92)]
 
 
+def test_a_synchronizer_still_in_its_warm_up_is_judged_once_as_the_pair_alone(monkeypatch, tmp_path):
+    run = tmp_path / "sync"
+    judge, kind = judge_with(monkeypatch, run, {(25, "zero"): 0.80, (75, None): 0.85}, kind="synchronizer")
+    judge.frozen_until = 50
+    for it in (25, 50, 75):
+        write_export(run, it, kind)
+        judge(it)
+    assert [(h["iteration"], h["f1"]) for h in judge.state["history"]] == [("unsynchronized", 0.80), (75, 0.85)]
+
+
 def test_the_minutes_of_a_stage_count_its_judgements(tmp_path):
     run = tmp_path / "left"
     run.mkdir()

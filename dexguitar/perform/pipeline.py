@@ -98,8 +98,9 @@ class Judge:
 
     FILE = "judge.json"
 
-    def __init__(self, run: Path, songs, target: float, every_s: float, log):
+    def __init__(self, run: Path, songs, target: float, every_s: float, log, frozen_until: int = 0):
         self.run, self.songs, self.target, self.every_s, self.log = Path(run), songs, target, every_s, log
+        self.frozen_until = frozen_until    # a synchronizer's actor has not moved yet: it is the pair alone
         path = self.run / self.FILE
         self.state = json.loads(path.read_text()) if path.exists() else {"best": None, "history": [],
                                                                          "seconds": 0.0}
@@ -120,6 +121,10 @@ class Judge:
         candidates = [(iteration, params, meta)]
         if meta.get("kind") == "synchronizer" and not done:        # the pair as it plays alone
             candidates.insert(0, ("unsynchronized", PO.unsynchronized(params), dict(meta, unsynchronized=True)))
+        if meta.get("kind") == "synchronizer" and iteration <= self.frozen_until:
+            if done:                                                # the same pair again
+                return self.reached()
+            candidates = candidates[:1]
         for it, p, m in candidates:
             f1 = self.score(p, m)
             self.state["history"].append({"iteration": it, "f1": f1})
@@ -187,7 +192,8 @@ class Songbook:
             meta.update(left=str(self.dir / "left"), right=str(self.dir / "right"))
         else:
             trainer = Trainer(cfg, timelines, reference_frames(load_motion(hand)), env_cfg)
-        judge = Judge(run_dir, self.songs, target, r.judge_seconds, self.log)
+        judge = Judge(run_dir, self.songs, target, r.judge_seconds, self.log,
+                      frozen_until=cfg.actor_warmup if stage == "sync" else 0)
         if left > 0 and not judge.reached():
             summary = train(trainer, run_dir, iterations=cfg.iterations, resume=resume, meta=meta,
                             max_minutes=left, init_from=None if resume else {"left": r.left_init,
