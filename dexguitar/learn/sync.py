@@ -46,10 +46,14 @@ class SyncTrainer(Trainer):
     def make_spec(self) -> PolicySpec:
         return PolicySpec("synchronizer", "duet", self.env.action_size, self.layout)
 
-    def init_policy(self, key):
-        params, norm = init_synchronizer(key, self.frozen["left"], self.frozen["right"], self.layout)
+    def init_inputs(self) -> dict:
+        return dict(super().init_inputs(), frozen=self.frozen)   # arguments of `init`: one program for any pair
+
+    def init_policy(self, key, inputs: dict | None = None):
+        frozen = (inputs or {}).get("frozen", self.frozen)
+        params, norm = init_synchronizer(key, frozen["left"], frozen["right"], self.layout)
         # fresh buffers: the training chunk donates its state, which must not take the trainer's own copy with it
-        return params, norm, jax.tree.map(lambda x: jnp.array(x, copy=True), self.frozen)
+        return params, norm, jax.tree.map(lambda x: jnp.array(x, copy=True), frozen)
 
 
 __all__ = ["SyncTrainer", "SYNC_ENV"]

@@ -13,6 +13,7 @@ are non-finite is skipped, and the counts come back in the metrics (`nonfinite/*
 from __future__ import annotations
 
 import dataclasses
+import functools
 from typing import Any
 
 import jax
@@ -26,6 +27,7 @@ from dexguitar.learn import networks as N
 from dexguitar.learn import ppo
 from dexguitar.learn.devices import Placement
 from dexguitar.learn.policy import PolicySpec, act_fn, distribution
+from dexguitar.learn.tracing import FreshJit
 from dexguitar.music import timeline as TL
 
 
@@ -175,10 +177,24 @@ class Trainer:
 
     # ------------------------------------------------------------------------------------------ init
     def init(self, key=None) -> TrainState:
+        """The first state of a run. One compiled program per trainer shape: the songs (and a synchronizer's frozen
+        policies) are its arguments (`init_inputs`), never constants, so the next song of a capacity loads it from
+        the persistent cache instead of compiling it again."""
+        key = jax.random.PRNGKey(self.config.seed) if key is None else key
+        return self._init_program(key, self.init_inputs())
+
+    def init_inputs(self) -> dict:
+        """What `init` reads besides the key: the arguments of its program."""
+        return {"songs": self.env.songs}
+
+    @functools.cached_property
+    def _init_program(self):
+        return jax.jit(self.initial_state)
+
+    def initial_state(self, key, inputs: dict) -> TrainState:
         cfg = self.config
-        key = jax.random.PRNGKey(cfg.seed) if key is None else key
         k_pol, k_crit, k_disc, k_env, k_age, key = jax.random.split(key, 6)
-        policy, obs_norm, frozen = self.init_policy(k_pol)
+        policy, obs_norm, frozen = self.init_policy(k_pol, inputs)
         frames = (self.layout.history, self.layout.frame_size)
         params = {
             "policy": policy,
@@ -192,7 +208,7 @@ class Trainer:
         opt = {k: self.optimizers[k].init(params[k]) for k in self.optimizers}
         if cfg.kl_target:
             opt["lr"] = jnp.float32(cfg.actor_lr)
-        env_state = jax.jit(jax.vmap(self.env.reset))(jax.random.split(k_env, cfg.num_envs))
+        env_state = jax.vmap(self.env.bind(inputs["songs"]).reset)(jax.random.split(k_env, cfg.num_envs))
         # Envs start at random ages, so their time-outs spread over the episode instead of all of them restarting
         # from the home pose together every `episode_frames` steps.
         env_state = env_state.replace(lifetime=jax.random.randint(k_age, (cfg.num_envs,), 0,
@@ -205,8 +221,8 @@ class Trainer:
             env=env_state, key=key, iteration=jnp.int32(0))
 
     # ------------------------------------------------------------------------------------------ pieces
-    def init_policy(self, key):
-        """(trainable policy parameters, observation normalizer, frozen parameters or None)."""
+    def init_policy(self, key, inputs: dict | None = None):
+        """(trainable policy parameters, observation normalizer, frozen parameters or None); `inputs`: `init`'s."""
         policy = N.Policy(self.env.action_size, self.config.log_std_init)
         return (N.init_params(policy, key, (self.layout.history, self.layout.frame_size),
                               (self.layout.goal_size,)),
@@ -397,12 +413,13 @@ class Trainer:
         """A jitted function (state, data) -> (state, metrics) running n iterations in one `lax.scan`; metrics
         summed over the chunk (sums of F1 and note counts, so the host can form the mean F1 per note). The state
         is split over the devices of `placement` (default: every device) and comes back placed as it went in, so
-        every call runs the one compiled program."""
+        every call runs the one compiled program. Its first trace starts from empty caches (`tracing`), so that
+        program is the same for every song of a capacity, whatever the process traced before."""
         placement = placement or Placement()
         state = placement.shardings(jax.eval_shape(self.init))
 
         def chunk(ts, data):
             ts, metrics = jax.lax.scan(lambda s, _: self.iteration(s, data), ts, None, length=n)
             return ts, jax.tree.map(lambda x: jnp.sum(x) if x.ndim else x, metrics)
-        return jax.jit(chunk, donate_argnums=0, in_shardings=(state, placement.replicated(self.data)),
-                       out_shardings=(state, placement.whole))
+        return FreshJit(jax.jit(chunk, donate_argnums=0, in_shardings=(state, placement.replicated(self.data)),
+                                out_shardings=(state, placement.whole)))

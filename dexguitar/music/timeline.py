@@ -140,7 +140,9 @@ def stack(timelines: Sequence[Timeline]) -> Timeline:
 
 def _stack(timelines: Sequence[Timeline]) -> Timeline:
     """Stack equal-capacity timelines along a new axis, on the host."""
-    return jax.tree.map(lambda *xs: jnp.asarray(np.stack([np.asarray(x) for x in xs])), *timelines)
+    # device_put, not jnp.asarray: a plain transfer, which compiles nothing (jnp.asarray compiles a small program per
+    # shape, again after every `learn.tracing.fresh_trace`)
+    return jax.tree.map(lambda *xs: jax.device_put(np.stack([np.asarray(x) for x in xs])), *timelines)
 
 
 # ----------------------------------------------------------------------------------------------------- goal codes

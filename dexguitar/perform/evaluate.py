@@ -18,19 +18,22 @@ import numpy as np
 from dexguitar import envs as E
 from dexguitar.envs.scoring import per_note_both
 from dexguitar.learn.policy import PolicySpec, act_fn, unsynchronized
+from dexguitar.learn.tracing import fresh_trace
 from dexguitar.music import timeline as TL
 
 HANDS = {"left": ("left",), "right": ("right",), "duet": ("left", "right", "both")}
 
 
 def rollout_notes(env, act, params, song_index, key, hands):
-    """Play song `song_index` of the env's batch from its start with `act(params, obs)` until it is over. Returns
-    (scores (W, hands, 6): [precision, recall, f1, tp, predicted, targets] of each window row, ended (W,): the row
-    was played to its end)."""
+    """Play songs `song_index` (n,) of the env's batch from their start, one env each (keys `key` (n,)), with
+    `act(params, obs)` until every one is over. Returns (scores (n, W, hands, 6): [precision, recall, f1, tp,
+    predicted, targets] of each window row, ended (n, W): the row was played to its end).
+
+    The loop is outside the vmap, not a vmapped loop (which is the same program: a song that is over keeps its
+    state): batching a `while_loop` re-batches its body until the carry's batching settles, half of the trace."""
     W = env.window_capacity
 
-    def body(carry):
-        state, scores, ended = carry
+    def one(state, scores, ended):
         nxt = env.step(state, act(params, state.obs)[0])
         row, end = state.cursor.note, nxt.info["note_end"]
         # this note's scores ("both" judged within the note: final only for the last note) ...
@@ -40,9 +43,15 @@ def rollout_notes(env, act, params, song_index, key, hands):
             b, prev = hands.index("both"), jnp.maximum(row - 1, 0)
             scores = scores.at[prev, b].set(jnp.where(end & (row > 0), nxt.info["both"], scores[prev, b]))
         return nxt, scores, ended.at[row].set(ended[row] | end)
-    state = env.reset(key, song_index)
-    carry = (state, jnp.zeros((W, len(hands), 6), jnp.float32), jnp.zeros(W, bool))
-    _, scores, ended = jax.lax.while_loop(lambda c: ~c[0].done, body, carry)
+
+    def body(carry):
+        playing = ~carry[0].done
+        return jax.tree.map(lambda new, old: jnp.where(playing.reshape((-1,) + (1,) * (new.ndim - 1)), new, old),
+                            jax.vmap(one)(*carry), carry)
+    state = jax.vmap(env.reset)(key, song_index)
+    n = song_index.shape[0]
+    carry = (state, jnp.zeros((n, W, len(hands), 6), jnp.float32), jnp.zeros((n, W), bool))
+    _, scores, ended = jax.lax.while_loop(lambda c: jnp.any(~c[0].done), body, carry)
     return scores, ended
 
 
@@ -92,8 +101,8 @@ COMPILE_SECONDS: dict = {}        # how long each cached program took to compile
 
 
 def _compiled(hand, env_config, spec, params, songs):
-    """(env, compiled play(params, songs) -> (scores, ended)): one per hand, env config, policy spec and song batch
-    capacity, kept for the life of the process."""
+    """(env, compiled play(params, songs) -> (scores, ended, note frames)): one per hand, env config, policy spec and
+    song batch capacity, kept for the life of the process."""
     key = (hand, env_config, spec, str(jax.tree.map(lambda x: (x.shape, str(x.dtype)), songs)))
     if key not in _CACHE:
         env = E.make(hand, songs, env_config)
@@ -103,8 +112,12 @@ def _compiled(hand, env_config, spec, params, songs):
             bound = env.bind(songs_)
             n = songs_.n_notes.shape[0]
             keys = jax.random.split(jax.random.PRNGKey(0), n)
-            return jax.vmap(lambda i, k: rollout_notes(bound, act, params, i, k, HANDS[hand]))(jnp.arange(n), keys)
+            scores, ended = rollout_notes(bound, act, params, jnp.arange(n), keys, HANDS[hand])
+            # each song's note lengths, as the env played them (in the program: no small programs on the host)
+            dur = jax.vmap(lambda i: bound.sample_window(jax.random.PRNGKey(0), i).dur)(jnp.arange(n))
+            return scores, ended, dur
         t0 = time.perf_counter()
+        fresh_trace()              # the same program whatever the process traced before (`learn.tracing`)
         _CACHE[key] = (env, jax.jit(play).lower(params, songs).compile())
         COMPILE_SECONDS[key] = time.perf_counter() - t0
     return _CACHE[key]
@@ -158,12 +171,11 @@ def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str |
     cfg = (env_config or E.EnvConfig()).evaluation()
     batch = TL.batch([TL.from_song(s) for s in songs])
     params = jax.tree.map(jnp.asarray, params)
-    env, play = _compiled(hand, cfg, spec, params, batch)
-    scores, ended = jax.device_get(play(params, batch))
+    _, play = _compiled(hand, cfg, spec, params, batch)
+    scores, ended, dur = jax.device_get(play(params, batch))
     results = {}
     for i, song in enumerate(songs):
-        window = jax.device_get(env.bind(batch).sample_window(jax.random.PRNGKey(0), i))
-        rows = note_rows(scores[i], ended[i], np.asarray(window.dur), song, HANDS[hand])
+        rows = note_rows(scores[i], ended[i], np.asarray(dur[i]), song, HANDS[hand])
         title = song.title or f"song{i}"
         results[title if title not in results else f"{title} ({i})"] = {"summary": summarize(rows, HANDS[hand]),
                                                                         "notes": rows}
