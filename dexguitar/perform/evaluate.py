@@ -101,7 +101,7 @@ COMPILE_SECONDS: dict = {}        # how long each cached program took to compile
 
 
 def _compiled(hand, env_config, spec, params, songs):
-    """(env, compiled play(params, songs) -> (scores, ended, note frames)): one per hand, env config, policy spec and
+    """The compiled play(params, songs) -> (scores, ended, note frames): one per hand, env config, policy spec and
     song batch capacity, kept for the life of the process."""
     key = (hand, env_config, spec, str(jax.tree.map(lambda x: (x.shape, str(x.dtype)), songs)))
     if key not in _CACHE:
@@ -118,7 +118,7 @@ def _compiled(hand, env_config, spec, params, songs):
             return scores, ended, dur
         t0 = time.perf_counter()
         fresh_trace()              # the same program whatever the process traced before (`learn.tracing`)
-        _CACHE[key] = (env, jax.jit(play).lower(params, songs).compile())
+        _CACHE[key] = jax.jit(play).lower(params, songs).compile()
         COMPILE_SECONDS[key] = time.perf_counter() - t0
     return _CACHE[key]
 
@@ -171,7 +171,7 @@ def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str |
     cfg = (env_config or E.EnvConfig()).evaluation()
     batch = TL.batch([TL.from_song(s) for s in songs])
     params = jax.tree.map(jnp.asarray, params)
-    _, play = _compiled(hand, cfg, spec, params, batch)
+    play = _compiled(hand, cfg, spec, params, batch)
     scores, ended, dur = jax.device_get(play(params, batch))
     results = {}
     for i, song in enumerate(songs):

@@ -116,14 +116,14 @@ class Judge:
         done = [h["iteration"] for h in self.state["history"]]
         if (not force and time.perf_counter() - self.last < self.every_s) or iteration in done:
             return self.reached()
+        if iteration <= self.frozen_until and done:                # the pair alone again, judged already
+            return self.reached()
         t0 = time.perf_counter()
         params, meta = PO.load(self.run / "policy")
         candidates = [(iteration, params, meta)]
         if meta.get("kind") == "synchronizer" and not done:        # the pair as it plays alone
             candidates.insert(0, ("unsynchronized", PO.unsynchronized(params), dict(meta, unsynchronized=True)))
-        if meta.get("kind") == "synchronizer" and iteration <= self.frozen_until:
-            if done:                                                # the same pair again
-                return self.reached()
+        if iteration <= self.frozen_until:                          # the synchronizer has not moved: that pair alone
             candidates = candidates[:1]
         for it, p, m in candidates:
             f1 = self.score(p, m)
