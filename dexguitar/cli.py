@@ -55,6 +55,13 @@ def positive_float(text: str) -> float:
     return value
 
 
+def minutes_or_zero(text: str) -> float:
+    value = float(text)
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"must be 0 or more, got {text}")
+    return value
+
+
 # ------------------------------------------------------------------------------------------------------- songs
 
 def song_summary(song) -> dict:
@@ -365,8 +372,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, help="directory of the stages and the table (songs.json, songs.md)")
     p.add_argument("--per-song", action="store_true", help="a left hand and a synchronizer per song (default: one "
                                                            "of each for all the songs together)")
-    p.add_argument("--left-minutes", type=positive_float)
-    p.add_argument("--right-minutes", type=positive_float)
+    p.add_argument("--left-minutes", type=minutes_or_zero, help="0: hand --left-init on untrained")
+    p.add_argument("--right-minutes", type=minutes_or_zero, help="0: hand --right-init on untrained")
     p.add_argument("--sync-minutes", type=positive_float)
     for stage in pipeline.STAGES:
         p.add_argument(f"--{stage}-target", type=positive_float, help=f"end the {stage} stage once its best export "

@@ -45,6 +45,24 @@ def test_the_left_and_right_stages_start_from_the_recipes_policies(recorder, tmp
     assert {s: round(d["minutes"], 6) for s, d in done.items()} == {"left": 1.0, "right": 1.0, "sync": 1.0}
 
 
+def test_a_hand_stage_of_zero_minutes_hands_its_starting_policy_on_untrained(recorder, tmp_path):
+    start = tmp_path / "R0"
+    start.mkdir()
+    (start / "policy.json").write_text('{"hand": "right"}')
+    (start / "params.bin").write_bytes(b"\x01\x02")
+    recipe = P.Recipe(left_init="L0", right_init=str(start), right_minutes=0.0)
+    book = P.Songbook(tmp_path / "out", "g", ["ode_to_joy"], recipe, log=lambda m: None)
+    book.run("right")
+    assert recorder.calls == []                                   # nothing trained
+    best = P.best_export(tmp_path / "out" / "g" / "right")
+    assert best == tmp_path / "out" / "g" / "right" / "best"
+    assert (best / "params.bin").read_bytes() == b"\x01\x02"
+    assert json.loads((tmp_path / "out" / "g" / "stages.json").read_text())["done"]["right"] == {"minutes": 0.0}
+    with pytest.raises(P.UserError, match="no policy to start from"):
+        P.Songbook(tmp_path / "out", "h", ["ode_to_joy"], P.Recipe(left_init=None, left_minutes=0.0),
+                   log=lambda m: None).run("left")
+
+
 def test_a_left_hand_from_scratch_and_the_default_warm_start(recorder, tmp_path):
     P.Songbook(tmp_path, "a", ["ode_to_joy"], P.Recipe(left_init=None), log=lambda m: None).run("left")
     assert recorder.calls[-1]["init_from"] is None
