@@ -13,6 +13,7 @@ hand. MP4 writing uses `imageio-ffmpeg`, which ships its own ffmpeg binary: an o
 from __future__ import annotations
 
 import warnings
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import mujoco
@@ -162,10 +163,19 @@ def render_video(model: mujoco.MjModel, qpos_frames, colors, out, fps: float = 3
         with warnings.catch_warnings():    # JAX warns about any fork; ffmpeg is exec'd at once, nothing is shared
             warnings.filterwarnings("ignore", message=r"os\.fork\(\) was called", category=RuntimeWarning)
             writer.send(None)
+        # ffmpeg takes a frame through a pipe that blocks until it has read all of it: a thread hands each frame
+        # over while the next one renders (the demo's 579 frames: 8.6 -> 7.6 s on 2 cores; the same file)
         try:
-            for t in range(len(qpos_frames)):
-                image = r.frame(qpos_frames[t], _pick(colors, t), _pick(captions, t), _pick(offsets, t))
-                writer.send(np.ascontiguousarray(image))
+            with ThreadPoolExecutor(1) as feeder:
+                sent = None
+                for t in range(len(qpos_frames)):
+                    image = np.ascontiguousarray(r.frame(qpos_frames[t], _pick(colors, t), _pick(captions, t),
+                                                         _pick(offsets, t)))
+                    if sent is not None:
+                        sent.result()                       # raises what ffmpeg's pipe raised
+                    sent = feeder.submit(writer.send, image)
+                if sent is not None:
+                    sent.result()
         finally:
             writer.close()
     return out
