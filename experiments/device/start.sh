@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# On the device: install the wheels, unpack the code snapshot into /tmp/code, start `dexguitar songs` in the
+# background (RUN, SONGS, MODE from the environment, other arguments passed on), then wait like poll.sh.
+python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --target /tmp/site .whl/*.whl || exit 1
+mkdir -p /tmp/code /tmp/runs && tar xzf .data/code.tgz -C /tmp/code && cp .data/poll.sh /tmp/poll.sh
+cd /tmp/code
+export PYTHONPATH=/tmp/site:/tmp/code PYTHONUNBUFFERED=1 DEXGUITAR_CACHE=/tmp/xla
+nvidia-smi --query-gpu=name,memory.total --format=csv,noheader
+setsid nohup python3 -c "import sys; from dexguitar.cli import main; sys.exit(main())" songs $SONGS $MODE \
+  --out /tmp/runs/$RUN "$@" > /tmp/runs/$RUN.log 2>&1 < /dev/null &
+sleep 2
+bash /tmp/poll.sh
