@@ -13,9 +13,12 @@ import pytest
 
 # LLVM at -O0 for the tests' programs (and for the processes they start, which inherit the environment): XLA's own
 # graph optimizations all still run, only the machine code is less tuned; it compiles the training programs ~40%
-# faster on a CPU, and the tiny test workloads barely notice the slower code. Set before JAX starts its backend.
-if "--xla_backend_optimization_level" not in os.environ.get("XLA_FLAGS", ""):
-    os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " --xla_backend_optimization_level=0").strip()
+# faster on a CPU, and the tiny test workloads barely notice the slower code. XLA's older loop emitters instead of its
+# fusion emitters take about as much again (tests/test_envs.py, two at once on 2 cores: 138 -> 73 s). Set before
+# JAX starts its backend.
+for flag in ("--xla_backend_optimization_level=0", "--xla_cpu_use_fusion_emitters=false"):
+    if flag.split("=")[0] not in os.environ.get("XLA_FLAGS", ""):
+        os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " " + flag).strip()
 
 CACHE = Path(os.environ.get("DEXGUITAR_TEST_CACHE", Path(__file__).resolve().parent.parent / ".cache" / "xla"))
 jax.config.update("jax_compilation_cache_dir", str(CACHE))
@@ -60,16 +63,19 @@ def compiles_per_call(compiles, monkeypatch):
 @pytest.fixture(scope="session")
 def compiled_chunk():
     """compiled_chunk(trainer, state): one training iteration compiled as `train` compiles it (placed, ahead of
-    time), so that tests calling it directly share `train`'s program through the persistent cache.
+    time), so that tests calling it directly share `train`'s program through the persistent cache; compiled once per
+    trainer in a process (a trace and a load from the cache take ~10 s).
     -> (chunk, state, data, put): the state and data placed, and `put` to place another (restored) state alike."""
     from dexguitar.learn.devices import Placement
+    chunks = {}
 
     def build(trainer, state):
         where = Placement()
         shardings = where.shardings(state)
         state, data = where.put(state, shardings), where.put(trainer.data, where.replicated(trainer.data))
-        chunk = trainer.make_train_chunk(1, where).lower(state, data).compile()
-        return chunk, state, data, lambda tree: where.put(tree, shardings)
+        if id(trainer) not in chunks:           # the trainer is kept with its chunk, so its id stays its own
+            chunks[id(trainer)] = trainer, trainer.make_train_chunk(1, where).lower(state, data).compile()
+        return chunks[id(trainer)][1], state, data, lambda tree: where.put(tree, shardings)
     return build
 
 
