@@ -65,6 +65,10 @@ class Recipe:
     iterations: int | None = None      # cap every stage's iterations (tests)
     envs: int | None = None            # override every config's num_envs
 
+    def start(self, stage: str) -> str | None:
+        """The policy a hand stage starts from (a synchronizer starts from its stages' best exports)."""
+        return {"left": self.left_init, "right": self.right_init}.get(stage)
+
 
 def song_name(path) -> str:
     return Path(str(path)).stem
@@ -199,8 +203,7 @@ class Songbook:
                       frozen_until=cfg.actor_warmup if stage == "sync" else 0)
         if left > 0 and not judge.reached():
             summary = train(trainer, run_dir, iterations=cfg.iterations, resume=resume, meta=meta,
-                            max_minutes=left, init_from=None if resume else {"left": r.left_init,
-                                                                             "right": r.right_init}.get(stage),
+                            max_minutes=left, init_from=None if resume else r.start(stage),
                             on_call=judge, log=self.log)
             if "iteration" in summary:              # the last export, if the judge has not seen it yet
                 judge(summary["iteration"], force=True)
@@ -214,7 +217,7 @@ class Songbook:
     def _hand_on_start(self, stage: str, run_dir: Path) -> None:
         """A hand stage of 0 minutes hands its starting policy on as it is (`right_mixed` already plays most
         songs' picking at 0.9-0.95; its one-minute stage mostly compiled and trained 25 iterations)."""
-        start = {"left": self.recipe.left_init, "right": self.recipe.right_init}[stage]
+        start = self.recipe.start(stage)
         if start is None or not (Path(start) / "policy.json").exists():
             raise UserError(f"{stage} stage of 0 minutes: no policy to start from at {start}")
         shutil.rmtree(run_dir / "best", ignore_errors=True)
