@@ -198,11 +198,21 @@ def test_stack():
 def test_batch_has_fixed_capacities():
     a, b = from_song(song_a()), from_song(song_3_to_7())
     assert [tlm.capacity(n, 1) for n in (1, 2, 3, 5, 8)] == [1, 2, 4, 8, 8] and tlm.capacity(3, 256) == 256
-    full = batch([a, b, a])                                       # 3 songs -> 4, 4 notes -> at least 256
-    assert full.left.shape == (4, 256, 6) and full.onset.shape == (4, 257)
+    full = batch([a, b, a])                                       # 3 songs -> 4, 4 notes -> at least 512
+    assert full.left.shape == (4, 512, 6) and full.onset.shape == (4, 513)
     assert np_(full.n_notes).tolist() == [4, 3, 4, 0]             # the fourth song is empty
     assert int(full.ticks_per_whole[3]) == 1 and not np_(full.ticks[3]).any()
     small = batch([a, b], songs=2, notes=8)
     assert small.left.shape == (2, 8, 6) and np_(small.onset[0]).tolist() == [0, 9, 27, 36] + [108] * 5
     with pytest.raises(ValueError):
         batch([a, b, a], songs=2)
+
+
+def test_one_batch_shape_for_short_and_long_songs():
+    """A 4-note song and one of 337 notes (the authors' longest) batch to the same shapes, so one compiled program
+    serves both; 600 notes need the next size."""
+    long = Song(tempo=120, notes=tuple(make_note(F(1, 8), [M, M, M, M, M, 3 + i % 5]) for i in range(337)))
+    longer = Song(tempo=120, notes=long.notes * 2)
+    a, b, c = batch([from_song(song_a())]), batch([from_song(long)]), batch([from_song(longer)])
+    assert a.left.shape == b.left.shape == (1, 512, 6) and a.onset.shape == b.onset.shape == (1, 513)
+    assert c.left.shape == (1, 1024, 6) and int(b.n_notes[0]) == 337

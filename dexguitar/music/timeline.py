@@ -169,6 +169,9 @@ def goal_vector(values, valid, timer) -> jax.Array:
 
 # ------------------------------------------------------------------------------------------ batches of fixed size
 
+MIN_NOTES = 512   # the authors' longest song has 337 notes: with 256, it alone needed its own programs (75 s each on an H100)
+
+
 def capacity(n: int, least: int) -> int:
     """The power of two >= max(n, least): song batches grow in a few sizes, so programs compiled for one size serve
     every song set that fits it."""
@@ -176,10 +179,10 @@ def capacity(n: int, least: int) -> int:
 
 
 def batch(timelines: Sequence[Timeline], *, songs: int | None = None, notes: int | None = None) -> Timeline:
-    """Stack timelines into a batch of fixed capacities (default: powers of two, at least 256 notes), filling up
+    """Stack timelines into a batch of fixed capacities (default: powers of two, at least `MIN_NOTES`), filling up
     with empty songs, which have no notes and are never drawn."""
     songs = songs or capacity(len(timelines), 1)
-    notes = notes or capacity(max(t.note_capacity for t in timelines), 256)
+    notes = notes or capacity(max(t.note_capacity for t in timelines), MIN_NOTES)
     if len(timelines) > songs:
         raise ValueError(f"{len(timelines)} songs do not fit a batch of {songs}")
     padded = [pad(t, notes) for t in timelines]
