@@ -89,6 +89,35 @@ def test_a_damaged_latest_checkpoint_falls_back_to_the_previous_one(tmp_path, ca
         C.restore(tmp_path, tree)
 
 
+def test_a_run_resumes_on_another_machine_from_its_compact_state(trainer, tmp_path, monkeypatch):
+    """`resume/` alone (what a device call brings back, without `ckpt/`) continues the run: networks, normalizers,
+    key, iteration and the optimizers' scalars as saved; envs, replay buffers and Adam's moments fresh."""
+    run = tmp_path / "run"
+    RUN.train(trainer, run, iterations=2, progress=False, log=lambda m: None)
+    fresh = trainer.init()
+    full, _ = C.restore(run / "ckpt", fresh)
+    shutil.rmtree(run / "ckpt")                                        # it stays on the first machine
+    assert C.steps(run / "resume") == [2]
+    with pytest.raises(RunError, match="already holds a run"):
+        RUN.check_out(run, resume=False)
+    seen, messages = {}, []
+    monkeypatch.setattr(RUN, "_loop", lambda trainer, run, where, state, *rest: seen.update(state=state) or {})
+    RUN.train(trainer, run, iterations=3, resume=True, progress=False, log=messages.append)
+    state = jax.device_get(seen["state"])
+    assert any("at iteration 2 from its compact state" in m for m in messages) and int(state.iteration) == 2
+
+    def same(a, b):
+        return all(jax.tree.leaves(jax.tree.map(lambda x, y: np.array_equal(np.asarray(x), np.asarray(y)), a, b)))
+    for name in RUN.KEPT:
+        assert same(getattr(state, name), getattr(full, name)), name
+    assert not same(full.params, fresh.params)                          # two iterations moved them
+    assert same(state.env, fresh.env) and same(state.buffers, fresh.buffers)
+    for got, saved, new in zip(*(jax.tree.leaves(x.opt) for x in (state, full, fresh))):
+        assert np.array_equal(got, saved if np.size(got) == 1 else new)
+    assert not same(full.opt, fresh.opt)                                # Adam's moments did move
+    assert len(run.joinpath("metrics.jsonl").read_text().splitlines()) == 2
+
+
 def test_a_run_directory_in_use_is_refused(tmp_path):
     held = RUN.RunDir(tmp_path / "run")
     with pytest.raises(RunError, match="in use by process"):

@@ -1,4 +1,5 @@
-"""Saving and restoring pytrees with orbax: the whole `TrainState` of a run (for --resume) and policy exports.
+"""Saving and restoring pytrees with orbax: the whole `TrainState` of a run (for --resume), a compact part of it
+(`only`: what cannot be rebuilt, small enough to carry between machines) and policy exports.
 
 A checkpoint directory holds numbered steps; the newest few are kept. Restoring falls back to the newest intact step
 when a later one is damaged (a file truncated or deleted by hand, a disk that filled up), with a warning, so one bad
@@ -21,15 +22,18 @@ def _manager(directory: Path, keep: int = 2, create: bool = True) -> ocp.Checkpo
         max_to_keep=keep, create=create))
 
 
-def _leaves(tree) -> dict:
-    """The non-empty leaves of a pytree by position (orbax refuses zero-size arrays, e.g. MJX's empty `act`)."""
-    return {f"{i:05d}": leaf for i, leaf in enumerate(jax.tree.leaves(tree)) if np.size(leaf) > 0}
+def _leaves(tree, only=None) -> dict:
+    """The non-empty leaves of a pytree by position (orbax refuses zero-size arrays, e.g. MJX's empty `act`), or
+    those of them that `only(key path, leaf)` keeps."""
+    return {f"{i:05d}": leaf for i, (path, leaf) in enumerate(jax.tree_util.tree_flatten_with_path(tree)[0])
+            if np.size(leaf) > 0 and (only is None or only(path, leaf))}
 
 
-def save(directory, step: int, tree, keep: int = 2) -> None:
-    """Save a pytree at `step` (blocking: when this returns the checkpoint is complete on disk)."""
+def save(directory, step: int, tree, keep: int = 2, only=None) -> None:
+    """Save a pytree (or the leaves `only` keeps) at `step` (blocking: when this returns the checkpoint is complete
+    on disk)."""
     with _manager(directory, keep) as mngr:
-        mngr.save(int(step), args=ocp.args.StandardSave(_leaves(tree)), force=True)
+        mngr.save(int(step), args=ocp.args.StandardSave(_leaves(tree, only)), force=True)
         mngr.wait_until_finished()
 
 
@@ -46,9 +50,10 @@ def latest_step(directory) -> int | None:
     return found[0] if found else None
 
 
-def restore(directory, target, step: int | None = None):
+def restore(directory, target, step: int | None = None, only=None):
     """(tree, step): the pytree saved at `step` (default: the newest intact one), restored into the structure,
-    dtypes and placement of `target`; its empty leaves are taken as they are."""
+    dtypes and placement of `target`; its empty leaves, and those `only` leaves out (as saved), are taken as they
+    are."""
     candidates = [step] if step is not None else steps(directory)
     if not candidates:
         raise RunError(f"{directory}: no checkpoint")
@@ -57,7 +62,7 @@ def restore(directory, target, step: int | None = None):
     for s in candidates:
         try:
             with _manager(directory, create=False) as mngr:
-                restored = mngr.restore(s, args=ocp.args.StandardRestore(_leaves(target)))
+                restored = mngr.restore(s, args=ocp.args.StandardRestore(_leaves(target, only)))
         except Exception as err:    # noqa: BLE001 - a damaged checkpoint surfaces as many error types
             errors.append(f"step {s}: {type(err).__name__}: {str(err).splitlines()[0][:200] if str(err) else ''}")
             print(f"warning: {directory}: checkpoint step {s} cannot be read ({errors[-1]}); trying an older one",

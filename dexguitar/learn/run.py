@@ -2,8 +2,9 @@
 only logs and saves; all learning happens inside the jitted chunk.
 
 A run directory holds `config.json` (how the run was made: compared on --resume), `ckpt/` (the last few whole train
-states), `metrics.jsonl` (one row per host call, written after its checkpoint, so a kill never leaves a row without
-one) and `policy/` (the export). A lock file keeps a second process out of a directory in use. Non-finite parameters
+states), `resume/` (the last compact state: what a run cannot rebuild, to carry a long run from machine to machine),
+`metrics.jsonl` (one row per host call, written after its checkpoints, so a kill never leaves a row without one) and
+`policy/` (the export). A lock file keeps a second process out of a directory in use. Non-finite parameters
 are never saved: the run rolls back to its last good checkpoint with a new random key and stops after repeated
 failures.
 """
@@ -32,6 +33,16 @@ SUMMED = ("episodes", "terminations")      # counts (and notes/*, nonfinite/*); 
 MAX_ROLLBACKS = 3                          # non-finite states in a row before giving up
 RESUME_FREE = ("iterations", "iterations_per_call")   # may change on --resume; nothing else may
 TRAIN_DEFAULTS = {f.name: f.default for f in dataclasses.fields(TrainConfig)}
+KEPT = ("params", "obs_norm", "disc_norm", "popart", "key", "iteration")
+
+
+def compact(path, leaf) -> bool:
+    """What `resume/` keeps of a train state: the networks, normalizers, random key and iteration, and the
+    optimizers' scalars (the adaptive actor rate, step counts). The envs start afresh, the discriminators' replay
+    buffers refill, and Adam's moment estimates restart. The general left hand's state (4096 envs) is 280 MiB;
+    this part of it, 20 MiB (19 MB on disk, 18.5 MB as a .tgz)."""
+    name = getattr(path[0], "name", None)
+    return name in KEPT or (name == "opt" and np.size(leaf) == 1)
 
 
 def compilation_cache(directory=None) -> Path:
@@ -71,7 +82,7 @@ def check_out(path, resume: bool) -> None:
         raise RunError(f"--out {path}: a file, not a directory")
     if resume and not (path / "config.json").exists():
         raise RunError(f"{path}: no run to resume here (no config.json); leave out --resume to start one")
-    if not resume and C.latest_step(path / "ckpt") is not None:
+    if not resume and any(C.latest_step(path / d) is not None for d in ("ckpt", "resume")):
         raise RunError(f"{path} already holds a run: pass --resume to continue it, or choose another --out")
 
 
@@ -104,6 +115,7 @@ class RunDir:
         self._lock.flush()
 
     ckpt = property(lambda self: self.path / "ckpt")
+    compact = property(lambda self: self.path / "resume")
     metrics = property(lambda self: self.path / "metrics.jsonl")
     config = property(lambda self: self.path / "config.json")
 
@@ -180,9 +192,10 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
             "train": dataclasses.asdict(cfg), "env": dataclasses.asdict(trainer.env.config),
             "columns": list(trainer.columns), "songs_digest": songs_digest(trainer.data.songs), **(meta or {})}))
         has_ckpt = C.latest_step(run.ckpt) is not None
+        has_compact = C.latest_step(run.compact) is not None
         if resume:
             run.check_resume(record)
-        elif has_ckpt:
+        elif has_ckpt or has_compact:
             raise RunError(f"{run.path} already holds a run: pass --resume to continue it, or choose another --out")
         state = trainer.init()
         shardings = where.shardings(state)
@@ -190,6 +203,11 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
             state, step = C.restore(run.ckpt, where.put(state, shardings))
             run.truncate_metrics(step)
             log(f"resumed {run.path} at iteration {int(state.iteration)}")
+        elif resume and has_compact:       # carried from another machine: the whole state stayed there
+            state, step = C.restore(run.compact, where.put(state, shardings), only=compact)
+            run.truncate_metrics(step)
+            log(f"resumed {run.path} at iteration {step} from its compact state (envs, replay buffers and the "
+                "optimizers' moments start afresh)")
         elif init_from:
             params, meta_init = PO.load(init_from)
             if meta_init.get("hand") != cfg.hand or meta_init.get("kind", "policy") != "policy":
@@ -252,6 +270,7 @@ def _loop(trainer, run, where, state, iterations, progress, stop_after_calls, ma
         summary.update(iteration=it, samples=it * cfg.batch, seconds=dt, samples_per_s=n * cfg.batch / dt,
                        wall=time.perf_counter() - t_start, compile_s=compile_s)
         C.save(run.ckpt, it, state)
+        C.save(run.compact, it, state, keep=1, only=compact)
         if where.main:
             with open(run.metrics, "a") as f:
                 f.write(json.dumps(summary) + "\n")

@@ -8,7 +8,7 @@ cd /tmp/runs
 for r in *.log; do tr '\r' '\n' < $r | grep -v "^\s*$" | tail -25; cp $r $OUT/; done
 for d in */; do cp -f $d/songs.json $d/songs.md $OUT/ 2>/dev/null; done
 if [ "$COLLECT" = 1 ]; then
-  for d in */*/; do s=$(basename $d); tar czf $OUT/$s.tgz --exclude=ckpt --exclude='*.lock' --exclude=best.tmp --exclude=policy -C $(dirname $d) $s; done
+  for d in */*/; do s=$(basename $d); tar czf $OUT/$s.tgz --exclude=ckpt --exclude=resume --exclude='*.lock' --exclude=best.tmp --exclude=policy -C $(dirname $d) $s; done
   tar czf - -C /tmp xla | split -b 15M - $OUT/xla.tgz.   # the compilation cache, for the next machine
   du -sh /tmp/xla; ls -la $OUT
 fi
