@@ -169,7 +169,8 @@ def goal_vector(values, valid, timer) -> jax.Array:
 
 # ------------------------------------------------------------------------------------------ batches of fixed size
 
-MIN_NOTES = 512   # the authors' longest song has 337 notes: with 256, it alone needed its own programs (75 s each on an H100)
+# The authors' longest song has 337 notes: with 256 it alone needed its own programs (75 s each on an H100).
+MIN_NOTES = 512
 
 
 def capacity(n: int, least: int) -> int:
