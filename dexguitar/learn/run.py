@@ -22,6 +22,7 @@ from pathlib import Path
 
 import jax
 import numpy as np
+import optax
 
 from dexguitar.errors import RunError, TrainingDiverged, UserError
 from dexguitar.learn import checkpoint as C
@@ -38,11 +39,18 @@ KEPT = ("params", "obs_norm", "disc_norm", "popart", "key", "iteration")
 
 def compact(path, leaf) -> bool:
     """What `resume/` keeps of a train state: the networks, normalizers, random key and iteration, and the
-    optimizers' scalars (the adaptive actor rate, step counts). The envs start afresh, the discriminators' replay
-    buffers refill, and Adam's moment estimates restart. The general left hand's state (4096 envs) is 280 MiB;
-    this part of it 20 MiB (19.5 MB on disk, 19.4 MB as a .tgz: `experiments/checkpoint_size.py`)."""
+    optimizers' scalars (the adaptive actor rate, the warm-up schedule's count). The envs start afresh, the
+    discriminators' replay buffers refill, and Adam restarts (`restart_adam`). The general left hand's state (4096
+    envs) is 280 MiB; this part of it 20 MiB (19.5 MB on disk, 19.4 MB as a .tgz: `experiments/checkpoint_size.py`)."""
     name = getattr(path[0], "name", None)
     return name in KEPT or (name == "opt" and np.size(leaf) == 1)
+
+
+def restart_adam(opt, fresh):
+    """`opt` with every Adam state taken from `fresh`: moments and step count together, since Adam's bias correction
+    for a late count would read zero moments as a tiny second moment and take steps several times too long."""
+    adam = lambda x: isinstance(x, optax.ScaleByAdamState)   # noqa: E731
+    return jax.tree.map(lambda kept, new: new if adam(kept) else kept, opt, fresh, is_leaf=adam)
 
 
 def compilation_cache(directory=None) -> Path:
@@ -204,10 +212,12 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
             run.truncate_metrics(step)
             log(f"resumed {run.path} at iteration {int(state.iteration)}")
         elif resume and has_compact:       # carried from another machine: the whole state stayed there
-            state, step = C.restore(run.compact, where.put(state, shardings), only=compact)
+            fresh = where.put(state, shardings)
+            state, step = C.restore(run.compact, fresh, only=compact)
+            state = state.replace(opt=restart_adam(state.opt, fresh.opt))
             run.truncate_metrics(step)
-            log(f"resumed {run.path} at iteration {step} from its compact state (envs, replay buffers and the "
-                "optimizers' moments start afresh)")
+            log(f"resumed {run.path} at iteration {step} from its compact state (envs, replay buffers and Adam "
+                "start afresh)")
         elif init_from:
             params, meta_init = PO.load(init_from)
             if meta_init.get("hand") != cfg.hand or meta_init.get("kind", "policy") != "policy":
