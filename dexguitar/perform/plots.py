@@ -84,7 +84,7 @@ def plot_chord_histogram(chord_f1, out, title: str = "F1 of the left hand per ch
     ax.set_xticks([i * width for i in range(F1_BINS + 1)])
     ax.set_xlabel("F1")
     ax.set_ylabel("fraction of chords")
-    ax.text(0.02, 0.95, f"{n} chords\nF1 >= {GOOD_F1}: {good:.0%}\nF1 < {POOR_F1}: {poor:.0%}",
+    ax.text(0.35, 0.95, f"{n} chords\nF1 >= {GOOD_F1}: {good:.0%}\nF1 < {POOR_F1}: {poor:.0%}",
             transform=ax.transAxes, va="top")
     ax.set_title(title)
     fig.tight_layout()
