@@ -20,6 +20,7 @@ mkdir -p /tmp/bin && printf '#!/bin/sh\nexec python3 -c "import sys; from dexgui
 # A compilation cache brought back from an earlier machine of the same kind (COLLECT=1 packs it) skips the compiles.
 [ -f .data/xla.tgz ] && tar xzf .data/xla.tgz -C /tmp && echo "cache: $(ls /tmp/xla | wc -l) programs"
 fi
+export REPO=$PWD                      # CMD may read carried files from there ($REPO/.data/...)
 cd /tmp/code
 export PYTHONPATH=/tmp/site:/tmp/code PYTHONUNBUFFERED=1 DEXGUITAR_CACHE=/tmp/xla PATH=/tmp/bin:$PATH
 nvidia-smi --query-gpu=name,memory.total --format=csv,noheader
