@@ -118,7 +118,7 @@ def main():
     md += ["", f"Left F1 over all {len(notes)} sounding notes: {overall['left_notes']:.3f} (open-string notes played "
            "cleanly included; the per-song F1 leaves them out). By note:", ""]
     for title, buckets in overall["breakdown_left"].items():
-        md += [f"| {title} | " + " | ".join(f"{b['range'][0]}–{b['range'][1]}" for b in buckets) + " |",
+        md += [f"| {title} | " + " | ".join(f"{lo}–{hi}" if hi < 1000 else f"{lo}+" for lo, hi in (b["range"] for b in buckets)) + " |",
                "|---|" + "---:|" * len(buckets),
                "| notes | " + " | ".join(str(b["notes"]) for b in buckets) + " |",
                "| left F1 | " + " | ".join(fmt(b["f1"]) for b in buckets) + " |", ""]
