@@ -32,5 +32,5 @@ def test_breakdown_by_neck_region():
 
 
 def test_chords_above_counts_strictly_above():
-    assert G["above"]({"a": 0.8, "b": 0.81, "c": 1.0, "d": 0.2}) == 0.5
-    assert G["above"]({}) is None
+    assert G["above"]([0.8, 0.81, 1.0, 0.2]) == 0.5
+    assert G["above"]([]) is None
