@@ -203,8 +203,8 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
         has_compact = C.latest_step(run.compact) is not None
         if resume:
             run.check_resume(record)
-        elif has_ckpt or has_compact:
-            raise RunError(f"{run.path} already holds a run: pass --resume to continue it, or choose another --out")
+        else:
+            check_out(run.path, resume=False)         # for callers that did not check (the pipeline, tests)
         state = trainer.init()
         shardings = where.shardings(state)
         if resume and has_ckpt:            # restored straight into this run's placement, whatever the saved one
