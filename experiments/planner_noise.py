@@ -1,0 +1,47 @@
+"""How exact the left hand's actions must be: the IK planner's own plans (`learn.distill`), rolled out with Gaussian
+noise added to every action, on training windows of the general material (EnvConfig defaults), and with the noise on
+the wrist's 6 DoFs or on the other 21 alone. Mean per-note precision, recall and F1 over the windows' notes.
+
+    XLA_FLAGS="--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1" JAX_PLATFORMS=cpu \\
+      .venv/bin/python experiments/planner_noise.py          # 16 windows, about 2 minutes on 2 cores
+"""
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from dexguitar import envs
+from dexguitar.learn import distill as D
+from dexguitar.music import procedural
+from dexguitar.music import timeline as TL
+
+WINDOWS = 16
+
+
+def main():
+    songs = procedural.material("left", "general", 0, 2000)
+    env = envs.ENVS["left"](TL.stack([TL.from_song(s) for s in songs]), envs.EnvConfig())
+    keys = D.window_keys(jax.random.PRNGKey(0), WINDOWS)
+    acts, valid = D.pad_plans(D.plan_windows(env, keys, workers=1), env.config.episode_frames)
+
+    @jax.jit
+    def scores(key, plan):
+        def body(s, a):
+            n = env.step(s, a)
+            return n, (n.info["left"][:3], n.info["note_end"] & (n.info["song_note"] >= 0))
+        return jax.lax.scan(body, env.reset(key), plan)[1]
+
+    def run(actions):
+        sc, closed = jax.tree.map(np.asarray, jax.vmap(scores)(keys, jnp.asarray(actions)))
+        return sc[closed & valid].mean(0)           # precision, recall, F1
+
+    noise = np.random.default_rng(0).normal(size=acts.shape).astype(np.float32)
+    wrist = np.r_[np.ones(6), np.zeros(21)].astype(np.float32)
+    print("| noise std (half ranges) | on | precision | recall | F1 |\n|---:|---|---:|---:|---:|")
+    for std, part, mask in [(0.0, "-", 1.0), (0.01, "all", 1.0), (0.02, "all", 1.0), (0.05, "all", 1.0),
+                            (0.02, "wrist (6)", wrist), (0.02, "thumb and fingers (21)", 1.0 - wrist)]:
+        p, r, f = run(acts + std * noise * mask)
+        print(f"| {std:g} | {part} | {p:.3f} | {r:.3f} | {f:.3f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
