@@ -24,10 +24,10 @@ def test_plans_rolled_out_score_as_the_scripted_player():
     plans = D.plan_windows(env, keys, workers=1, log=lambda m: None)
     acts, valid = D.pad_plans(plans, len(plans[0]))
     spec = PO.PolicySpec("policy", "left", env.action_size, env.layout)
-    obs, alive, f1, closed = D.chunked(D.rollout_fn(env, spec), PO.template(spec), keys, jnp.asarray(acts), False,
+    obs, alive, scores, closed = D.chunked(D.rollout_fn(env, spec), PO.template(spec), keys, jnp.asarray(acts), False,
                                        jnp.float32(0.0), jax.random.PRNGKey(0))
     assert alive.all()
-    per_note = f1[closed & valid]
+    per_note = scores[closed & valid][:, 2]
     assert len(per_note) == len(MELODY)
     np.testing.assert_allclose(per_note, reference["per_note"][:, 2], atol=1e-6)
     assert per_note.mean() >= 0.95

@@ -41,7 +41,7 @@ class DistillConfig:
     steps: int = 2000            # Adam steps per round, on all the data gathered so far
     batch: int = 4096            # samples per Adam step
     lr: float = 3e-4
-    # Action noise costs the planner most of its F1 (results/planner_noise.md: 0.60 without, 0.41 at std 0.01, 0.27
+    # Action noise costs the planner most of its F1 (results/planner_noise.md: 0.60 without, 0.41 at std 0.01, 0.28
     # at 0.02, of which the wrist alone 0.27), hence these three:
     noise: float = 0.0           # Gaussian noise on the rolled-out actions
     wrist_weight: float = 10.0   # loss weight of the 6 wrist DoFs, which carry every fingertip
@@ -121,9 +121,10 @@ def pad_plans(plans: list[np.ndarray], frames: int) -> tuple[np.ndarray, np.ndar
 # ------------------------------------------------------------------------------------------------- rollouts
 
 def rollout_fn(env: GuitarEnv, spec: PO.PolicySpec):
-    """rollout(params, keys, plans, student, noise, key) -> (obs (B, T, O), alive (B, T), f1 (B, T), closed (B, T)):
-    each window from `env.reset(k)`, stepped with the plan's actions or (`student`) the policy's mean, plus noise.
-    `alive` is False from an episode's termination on; `f1` is the left/right per-note F1 where a note closed."""
+    """rollout(params, keys, plans, student, noise, key) -> (obs (B, T, O), alive (B, T), scores (B, T, 3),
+    closed (B, T)): each window from `env.reset(k)`, stepped with the plan's actions or (`student`) the policy's mean,
+    plus noise. `alive` is False from an episode's termination on; `scores` are the hand's per-note precision, recall
+    and F1 where a note closed."""
     act = PO.act_fn(spec, deterministic=True)
     hand = spec.hand
 
@@ -137,7 +138,7 @@ def rollout_fn(env: GuitarEnv, spec: PO.PolicySpec):
             a = a + noise * jax.random.normal(k, a.shape)
             nxt = env.step(s, a)
             closed = nxt.info["note_end"] & (nxt.info["song_note"] >= 0) & alive
-            out = (s.obs, alive, nxt.info[hand][2], closed)
+            out = (s.obs, alive, nxt.info[hand][:3], closed)
             return (nxt, alive & ~nxt.terminated), out
         ks = jax.random.split(k_noise, plan.shape[0])
         return jax.lax.scan(body, (state, jnp.bool_(True)), (plan, ks))[1]
@@ -160,10 +161,14 @@ def chunked(rollout, params, keys, plans, student, noise, key):
     return tuple(np.concatenate(x) for x in zip(*parts))
 
 
-def window_f1(f1, closed, valid) -> float:
-    """Mean per-note F1 over the notes closed inside the plans (the song notes of each window)."""
+def window_scores(scores, closed, valid) -> np.ndarray:
+    """Mean per-note (precision, recall, F1) over the notes closed inside the plans (the song notes of each window)."""
     m = np.asarray(closed) & valid
-    return float(np.asarray(f1)[m].mean()) if m.any() else float("nan")
+    return np.asarray(scores)[m].mean(0) if m.any() else np.full(3, np.nan)
+
+
+def window_f1(scores, closed, valid) -> float:
+    return float(window_scores(scores, closed, valid)[2])
 
 
 # ------------------------------------------------------------------------------------------------- fitting
@@ -200,17 +205,15 @@ def fit_fn(spec: PO.PolicySpec, cfg: DistillConfig):
 
 # ------------------------------------------------------------------------------------------------- the loop
 
-def distill(env: GuitarEnv, cfg: DistillConfig, log=print, plans=None, keys=None):
+def distill(env: GuitarEnv, cfg: DistillConfig, log=print):
     """(params, spec, history): a policy of `env`'s hand fitted to the planner by `cfg.rounds` DAgger rounds.
     `history` holds per round the rolled-out window F1 (round 0: the planner's), the data size and the losses, then
     the fitted student's window F1."""
     cfg.check()
     key = jax.random.PRNGKey(cfg.seed)
     k_windows, k_init, key = jax.random.split(key, 3)
-    if keys is None:
-        keys = window_keys(k_windows, cfg.windows)
-    if plans is None:
-        plans = plan_windows(env, keys, cfg.workers, log)
+    keys = window_keys(k_windows, cfg.windows)
+    plans = plan_windows(env, keys, cfg.workers, log)
     frames = env.config.episode_frames
     acts, valid = pad_plans(plans, frames)
     spec = PO.PolicySpec("policy", env.roles[0], env.action_size, env.layout)
@@ -224,12 +227,12 @@ def distill(env: GuitarEnv, cfg: DistillConfig, log=print, plans=None, keys=None
     for r in range(cfg.rounds):
         key, k_roll, k_fit = jax.random.split(key, 3)
         t0 = time.time()
-        obs, alive, f1, closed = chunked(rollout, params, keys, jnp.asarray(acts), r > 0, jnp.float32(cfg.noise),
+        obs, alive, scores, closed = chunked(rollout, params, keys, jnp.asarray(acts), r > 0, jnp.float32(cfg.noise),
                                          k_roll)
         keep = valid & alive
         data_obs.append(obs[keep])
         data_act.append(acts[keep])
-        score = window_f1(f1, closed, valid)
+        score = window_f1(scores, closed, valid)
         if r == 0:
             params = {**params, "obs_norm": frame_stats(spec, data_obs[0])}
         all_obs, all_act = jnp.asarray(np.concatenate(data_obs)), jnp.asarray(np.concatenate(data_act))
@@ -242,8 +245,8 @@ def distill(env: GuitarEnv, cfg: DistillConfig, log=print, plans=None, keys=None
         log(f"round {r}: {'planner' if r == 0 else 'student'} F1 on its windows {score:.3f} (noise {cfg.noise}); "
             f"fitted {cfg.steps} steps on {all_obs.shape[0]:,} samples, loss {float(losses[0]):.4f} -> {loss:.4f} "
             f"({t1 - t0:.0f} s rollout, {time.time() - t1:.0f} s fit)")
-    _, _, f1, closed = chunked(rollout, params, keys, jnp.asarray(acts), True, jnp.float32(0.0), key)
-    history.append({"round": cfg.rounds, "rolled_out": "student", "window_f1": window_f1(f1, closed, valid)})
+    _, _, scores, closed = chunked(rollout, params, keys, jnp.asarray(acts), True, jnp.float32(0.0), key)
+    history.append({"round": cfg.rounds, "rolled_out": "student", "window_f1": window_f1(scores, closed, valid)})
     log(f"the fitted student's F1 on the windows: {history[-1]['window_f1']:.3f}")
     return params, spec, history
 
@@ -263,4 +266,4 @@ def export(directory, params, spec: PO.PolicySpec, cfg: DistillConfig, history, 
 
 
 __all__ = ["DistillConfig", "distill", "plan_windows", "pad_plans", "rollout_fn", "fit_fn", "frame_stats", "export",
-           "window_keys", "window_f1"]
+           "window_keys", "window_scores", "window_f1"]
