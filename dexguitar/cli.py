@@ -27,7 +27,7 @@ from dexguitar.envs.bench import bench_env, check_scenes
 from dexguitar.errors import UserError
 from dexguitar.learn import distill as DI
 from dexguitar.learn import policy as PO
-from dexguitar.learn.run import check_out, compilation_cache, load_config, train
+from dexguitar.learn.run import check_init, check_out, compilation_cache, load_config, train
 from dexguitar.learn.sync import SyncTrainer
 from dexguitar.learn.trainer import Trainer
 from dexguitar.motion import load_motion
@@ -146,7 +146,7 @@ def _train(args) -> int:
     songs = _material(args, cfg.hand)
     motion = load_motion(args.motion or cfg.hand)
     if args.init_from:
-        PO.load(args.init_from)           # refuse a bad --init-from before building anything
+        check_init(args.init_from, cfg.hand, bool(env_cfg and env_cfg.feedforward))   # before building anything
     trainer = Trainer(cfg, [TL.from_song(s) for s in songs], reference_frames(motion), env_cfg)
     print(f"training the {cfg.hand} hand on {len(songs)} song(s) with {cfg.num_envs} envs x {cfg.horizon} steps "
           f"({cfg.batch} samples per iteration) on {jax.devices()[0].device_kind}; reference motion "
@@ -426,7 +426,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--config-right")
     p.add_argument("--config-sync")
     p.add_argument("--left-init", help="the left-hand policy to start from (default models/policies/left_official15; "
-                   "'none' with --config-left experiments/left_songs.py: from scratch)")
+                   "'none' with --config-left experiments/left_songs.py: from scratch; with experiments/left_residual.py: "
+                   "a residual on the IK planner)")
     p.add_argument("--right-init", help="the right-hand policy to start from (default models/policies/right_mixed)")
     p.add_argument("--envs", type=positive, help="override every stage's num_envs")
     p.add_argument("--iterations", type=positive, help="cap every stage's iterations")

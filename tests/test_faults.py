@@ -197,6 +197,8 @@ BAD = [
      "--motion", "{tmp}/motion.npz"],
     ["train", "--song", "ode_to_joy", "--out", "{tmp}/r7", "--config", "experiments/cpu_smoke.py",
      "--init-from", "{tmp}/nothing"],
+    ["train", "--song", "ode_to_joy", "--out", "{tmp}/r8", "--config", "{tmp}/residual.py",   # a plain policy as
+     "--init-from", "models/policies/left_ode_to_joy"],                                     # a residual's start
     ["eval", "--ckpt", "{tmp}/nothing", "--song", "ode_to_joy"],
     ["sync", "--song", "ode_to_joy", "--left", "{tmp}/nothing", "--right", "{tmp}/nothing", "--out", "{tmp}/s1"],
     ["songs", "{tmp}/missing.json", "--out", "{tmp}/s2"],
@@ -213,6 +215,9 @@ def test_every_command_refuses_bad_paths_in_one_line(argv, tmp_path, capsys):
     (tmp_path / "empty").mkdir()
     (tmp_path / "noconfig.py").write_text("X = 1\n")
     (tmp_path / "afile").write_text("not a directory\n")
+    (tmp_path / "residual.py").write_text("import dataclasses, runpy\nfrom dexguitar.envs import EnvConfig\n"
+                                          "CONFIG = runpy.run_path('experiments/cpu_smoke.py')['CONFIG']\n"
+                                          "ENV = EnvConfig(feedforward=True)\n")
     (tmp_path / "motion.npz").write_bytes(b"PK\x03\x04 truncated")
     argv = [a.format(tmp=tmp_path) for a in argv]
     assert main(argv) == 2

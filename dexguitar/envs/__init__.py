@@ -21,6 +21,11 @@ def make(hand: str, songs, config: EnvConfig | None = None, backend: str = "jax"
     if isinstance(songs, (list, tuple)):
         songs = TL.stack([s if isinstance(s, TL.Timeline) else TL.from_song(s) for s in songs])
     config = dataclasses.replace(config or EnvConfig(episode_frames=1200 if hand == "duet" else 600), **overrides)
+    if config.feedforward and "left" not in ENVS[hand].roles:
+        raise ValueError(f"EnvConfig.feedforward is the left hand's planned motion; the {hand} env has no left hand")
+    if config.feedforward and songs.plan is None:
+        raise ValueError("EnvConfig.feedforward needs the planner's motion of the songs: "
+                         "dexguitar.motion.feedforward.prepare(songs, config)")
     env = ENVS[hand](songs, config, backend)
     return PlayThrough(env) if config.sequential else AutoReset(ChainWindows(env))
 

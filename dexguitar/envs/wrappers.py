@@ -46,6 +46,8 @@ class Wrapper:
 class ChainWindows(Wrapper):
     def step(self, state, action):
         s = self.env.step(state, action)
+        if self.env.planned:      # a planned song's window ends its episode: the next starts in its planned state
+            return s.replace(done=s.done | s.cursor.over)
         key, k_win = jax.random.split(s.key)
         over = s.cursor.over
         cursor = tree_where(over, CU.start(self.env.sample_window(k_win)), s.cursor)

@@ -17,10 +17,7 @@ Data flow: song batch -> training windows (the env's own sampler, augmentation i
 """
 from __future__ import annotations
 
-import concurrent.futures as futures
 import dataclasses
-import multiprocessing
-import os
 import time
 import warnings
 
@@ -32,6 +29,7 @@ import optax
 from dexguitar.envs.core import GuitarEnv
 from dexguitar.learn import networks as N
 from dexguitar.learn import policy as PO
+from dexguitar.motion.feedforward import in_processes
 
 
 @dataclasses.dataclass(frozen=True)
@@ -88,24 +86,8 @@ def plan_windows(env: GuitarEnv, keys, workers: int = 0, log=print) -> list[np.n
     for i in range(len(keys)):
         notes = Notes.from_window(jax.tree.map(lambda x: x[i], windows))
         jobs.append((role, notes.left, notes.pick, notes.onset))
-    workers = workers or os.cpu_count() or 1
     t0 = time.time()
-    if workers == 1:
-        plans = [_plan(j) for j in jobs]
-    else:
-        ctx = multiprocessing.get_context("spawn")      # the parent runs JAX threads: never fork it
-        # one BLAS/OpenMP thread per process: 16 processes of 16 threads each ran at a load of 150 on 16 cores
-        threads = {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
-        os.environ.update({k: "1" for k in threads})
-        try:
-            with futures.ProcessPoolExecutor(workers, mp_context=ctx) as pool:
-                plans = list(pool.map(_plan, jobs, chunksize=max(1, len(jobs) // (8 * workers))))
-        finally:
-            for k, v in threads.items():
-                if v is None:
-                    os.environ.pop(k, None)
-                else:
-                    os.environ[k] = v
+    plans, workers = in_processes(_plan, jobs, workers)
     log(f"planned {len(plans)} windows ({sum(len(p) for p in plans):,} frames) in {time.time() - t0:.0f} s "
         f"on {workers} processes")
     return plans

@@ -39,16 +39,22 @@ class PolicySpec:
     hand: str                 # "left", "right" or "duet"
     action_size: int
     layout: ObsLayout
+    feedforward: bool = False  # the left hand's action is a residual on the planner's (`motion.feedforward`)
 
     def hand_spec(self, i: int) -> "PolicySpec":
         """The single-hand policy of hand i of a synchronizer."""
-        return PolicySpec("policy", self.layout.roles[i], self.action_size // self.layout.hands,
-                          self.layout.one_hand(i))
+        role = self.layout.roles[i]
+        return PolicySpec("policy", role, self.action_size // self.layout.hands, self.layout.one_hand(i),
+                          self.feedforward and role == "left")
+
+    def env_config(self, config):
+        """`config` (an `EnvConfig`) as this policy must be played in: on the planner's feedforward or not."""
+        return dataclasses.replace(config, feedforward=self.feedforward)
 
     def to_meta(self) -> dict:
         return {"kind": self.kind, "hand": self.hand, "action_size": self.action_size,
                 "layout": self.layout.to_dict(), "obs_size": self.layout.obs_size,
-                "goal_size": self.layout.goal_size}
+                "goal_size": self.layout.goal_size} | ({"feedforward": True} if self.feedforward else {})
 
     @classmethod
     def from_meta(cls, meta: dict) -> "PolicySpec":
@@ -58,7 +64,8 @@ class PolicySpec:
             roles = ("left", "right") if meta["hand"] == "duet" else (meta["hand"],)
             goal = meta["goal_size"] // len(roles)
             layout = ObsLayout(roles, 2, (meta["obs_size"] - meta["goal_size"]) // (2 * len(roles)), goal, 6)
-        return cls(meta.get("kind", "policy"), meta["hand"], meta["action_size"], layout)
+        return cls(meta.get("kind", "policy"), meta["hand"], meta["action_size"], layout,
+                   bool(meta.get("feedforward", False)))
 
 
 # ----------------------------------------------------------------------------------------------------- acting

@@ -181,6 +181,21 @@ def export(trainer: Trainer, state, directory) -> None:
     PO.export(directory, trainer.actor_params(state.params, state.obs_norm), meta)
 
 
+def check_init(init_from, hand: str, feedforward: bool) -> tuple[dict, dict]:
+    """(params, meta) of the exported policy that a run of `hand` starts from, if it can: a policy of that hand, and
+    a residual on the planner exactly when the run trains one (`EnvConfig.feedforward`)."""
+    params, meta = PO.load(init_from)
+    if meta.get("hand") != hand or meta.get("kind", "policy") != "policy":
+        raise UserError(f"--init-from {init_from}: a {meta.get('hand')} hand {meta.get('kind', 'policy')}, not a "
+                        f"{hand} hand policy")
+    residual = PO.PolicySpec.from_meta(meta).feedforward
+    if residual != feedforward:
+        what = {True: "a residual on the IK planner", False: "a plain policy"}
+        raise UserError(f"--init-from {init_from}: {what[residual]}, but this run's ENV trains {what[feedforward]} "
+                        "(EnvConfig.feedforward)")
+    return params, meta
+
+
 def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, progress: bool = True,
           meta: dict | None = None, stop_after_calls: int | None = None, max_minutes: float | None = None,
           init_from=None, on_call=None, devices: int | None = None, log=None) -> dict:
@@ -219,10 +234,7 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
             log(f"resumed {run.path} at iteration {step} from its compact state (envs, replay buffers and Adam "
                 "start afresh)")
         elif init_from:
-            params, meta_init = PO.load(init_from)
-            if meta_init.get("hand") != cfg.hand or meta_init.get("kind", "policy") != "policy":
-                raise UserError(f"--init-from {init_from}: a {meta_init.get('hand')} hand "
-                                f"{meta_init.get('kind', 'policy')}, not a {cfg.hand} hand policy")
+            params, meta_init = check_init(init_from, cfg.hand, trainer.env.config.feedforward)
             state = state.replace(params=dict(state.params, policy=params["policy"]), obs_norm=params["obs_norm"])
             log(f"policy initialized from {init_from} ({meta_init.get('samples', 0):,} samples)")
         if where.main and (not resume or not run.config.exists()):

@@ -37,14 +37,15 @@ class SyncTrainer(Trainer):
         """left, right: (params {"policy", "obs_norm"}, meta) of exported single-hand policies."""
         if config.hand != "duet":
             config = dataclasses.replace(config, hand="duet")
-        super().__init__(config, songs, reference, env_config or SYNC_ENV)
+        env_config = PolicySpec.from_meta(left[1]).env_config(env_config or SYNC_ENV)   # a residual left hand
+        super().__init__(config, songs, reference, env_config)
         check_pair(left[1], right[1], self.layout, where=(left[1].get("path", "LEFT"), right[1].get("path",
                                                                                                     "RIGHT")))
         self.frozen = {"left": left[0], "right": right[0]}
         self.sources = {"left": left[1], "right": right[1]}
 
     def make_spec(self) -> PolicySpec:
-        return PolicySpec("synchronizer", "duet", self.env.action_size, self.layout)
+        return PolicySpec("synchronizer", "duet", self.env.action_size, self.layout, self.env.config.feedforward)
 
     def init_inputs(self) -> dict:
         return dict(super().init_inputs(), frozen=self.frozen)   # arguments of `init`: one program for any pair

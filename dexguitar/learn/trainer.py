@@ -28,6 +28,7 @@ from dexguitar.learn import ppo
 from dexguitar.learn.devices import Placement
 from dexguitar.learn.policy import PolicySpec, act_fn, distribution
 from dexguitar.learn.tracing import FreshJit
+from dexguitar.motion import feedforward as FF
 from dexguitar.music import timeline as TL
 
 
@@ -144,7 +145,7 @@ class Trainer:
         self.config = config
         if not isinstance(songs, TL.Timeline):
             songs = TL.batch(list(songs))
-        self.env = E.make(config.hand, songs, env_config)
+        self.env = E.make(config.hand, FF.prepare(songs, env_config), env_config)
         self.layout = self.env.layout
         self.spec = self.make_spec()
         self.disc_specs = IM.DISCRIMINATORS[config.hand] if reference is not None else {}
@@ -173,7 +174,8 @@ class Trainer:
         }
 
     def make_spec(self) -> PolicySpec:
-        return PolicySpec("policy", self.config.hand, self.env.action_size, self.layout)
+        return PolicySpec("policy", self.config.hand, self.env.action_size, self.layout,
+                          self.env.config.feedforward)
 
     # ------------------------------------------------------------------------------------------ init
     def init(self, key=None) -> TrainState:
@@ -224,9 +226,11 @@ class Trainer:
     def init_policy(self, key, inputs: dict | None = None):
         """(trainable policy parameters, observation normalizer, frozen parameters or None); `inputs`: `init`'s."""
         policy = N.Policy(self.env.action_size, self.config.log_std_init)
-        return (N.init_params(policy, key, (self.layout.history, self.layout.frame_size),
-                              (self.layout.goal_size,)),
-                N.normalizer_init(self.layout.frame_size), None)
+        params = N.init_params(policy, key, (self.layout.history, self.layout.frame_size), (self.layout.goal_size,))
+        if self.env.config.feedforward:   # a residual starts at exactly zero (the planner), not at +-0.03
+            mu = dict(params["params"]["mu"], kernel=jnp.zeros_like(params["params"]["mu"]["kernel"]))
+            params = {**params, "params": {**params["params"], "mu": mu}}
+        return params, N.normalizer_init(self.layout.frame_size), None
 
     @staticmethod
     def actor_params(params, obs_norm) -> dict:

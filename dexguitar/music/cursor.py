@@ -29,6 +29,7 @@ class Window:
     n: jnp.ndarray         # int32 () valid rows
     song: jnp.ndarray      # int32 () index of the song in the batch
     first: jnp.ndarray     # int32 () song note index of row 1
+    start: jnp.ndarray     # int32 () song frame of row 0 (the frame index of a song's `plan`)
 
 
 @struct.dataclass
@@ -115,7 +116,12 @@ def sample_window(songs: TL.Timeline, key, capacity: int, *, sequential: bool, w
         bump = jax.random.randint(k_tempo, (), -tempo_delta, tempo_delta + 1)
         tempo = jnp.where(jax.random.uniform(k_p) < tempo_prob, jnp.maximum(tempo + bump, TL.MIN_TEMPO), tempo)
     dur = note_frames(ticks, valid, songs.ticks_per_whole[song], tempo, min_frames)
-    if not sequential:
+    start = jnp.int32(0)
+    if songs.plan is not None:        # the planned song's own frames: as written, nothing shifted or capped
+        onset = songs.onset[song]
+        dur = jnp.where(valid, jnp.diff(onset)[idx], 0)
+        start = onset[jnp.minimum(first, onset.shape[0] - 1)]
+    elif not sequential:
         dur = jnp.minimum(dur, max_note_frames)
         left, frets = shift_frets(left, frets, valid, k_shift, shift_prob)
 
@@ -127,7 +133,7 @@ def sample_window(songs: TL.Timeline, key, capacity: int, *, sequential: bool, w
         lo = jnp.min(jnp.where(pick, i, N_STRINGS), axis=1, keepdims=True)
         hi = jnp.max(jnp.where(pick, i, -1), axis=1, keepdims=True)
         pick = (i >= lo) & (i <= hi)
-    return Window(left, pick, frets, dur.astype(jnp.int32), (n + 1).astype(jnp.int32), song, first)
+    return Window(left, pick, frets, dur.astype(jnp.int32), (n + 1).astype(jnp.int32), song, first, start)
 
 
 # ------------------------------------------------------------------------------------------------ goals
@@ -164,6 +170,13 @@ def current(cursor: Cursor):
     """(left-hand goal code (6,), pick targets (6,), frames of the current row) of the note being played."""
     w, i = cursor.window, jnp.minimum(cursor.note, cursor.window.dur.shape[-1] - 1)
     return w.left[i], w.pick[i] & ~cursor.over, w.dur[i]
+
+
+def song_frame(cursor: Cursor):
+    """The song frame being played (the row of a `Plan`): the window's start + the frames of the rows played."""
+    w = cursor.window
+    played = jnp.sum(jnp.where(jnp.arange(w.dur.shape[-1]) < cursor.note, w.dur, 0))
+    return w.start + played + cursor.note_frame
 
 
 def advance(cursor: Cursor):

@@ -24,7 +24,7 @@ Conventions
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import Sequence
+from typing import Any, Sequence
 
 import flax.struct
 import jax
@@ -58,6 +58,7 @@ class Timeline:
     n_frames: jax.Array     # int32 (): length at the written tempo, after rounding
     tempo: jax.Array        # float32 (): effective tempo after rounding
     base_tempo: jax.Array   # float32 (): tempo as written in the song
+    plan: Any = None        # `motion.feedforward.Plan` of the left hand, frame-indexed (`EnvConfig.feedforward`)
 
     @property
     def note_capacity(self) -> int:

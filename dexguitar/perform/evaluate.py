@@ -19,6 +19,7 @@ from dexguitar import envs as E
 from dexguitar.envs.scoring import per_note_both
 from dexguitar.learn.policy import PolicySpec, act_fn, unsynchronized
 from dexguitar.learn.tracing import fresh_trace
+from dexguitar.motion import feedforward as FF
 from dexguitar.music import timeline as TL
 
 HANDS = {"left": ("left",), "right": ("right",), "duet": ("left", "right", "both")}
@@ -168,8 +169,8 @@ def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str |
     """F1 of a policy on each song, all songs played at once (one env each). `hand` defaults to the policy's
     (a synchronizer plays the duet). Returns {title: {"summary", "notes"}}."""
     hand = hand or spec.hand
-    cfg = (env_config or E.EnvConfig()).evaluation()
-    batch = TL.batch([TL.from_song(s) for s in songs])
+    cfg = spec.env_config(env_config or E.EnvConfig()).evaluation()
+    batch = FF.prepare(TL.batch([TL.from_song(s) for s in songs]), cfg)
     params = jax.tree.map(jnp.asarray, params)
     play = _compiled(hand, cfg, spec, params, batch)
     scores, ended, dur = jax.device_get(play(params, batch))

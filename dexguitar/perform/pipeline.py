@@ -4,7 +4,8 @@ Stages, per group of songs (all the songs together by default, or each song alon
 
   left    a left-hand policy trained on the group's songs as written (no fret shift, no tempo change: the authors'
           song-specific recipe, reference §3.4), warm-started from `left_init` (default: the shipped left hand of the
-          15 official songs; None: from scratch, best with `experiments/left_songs.py` as its config)
+          15 official songs; None: from scratch, best with `experiments/left_songs.py` as its config, or
+          with `experiments/left_residual.py` a residual on the IK planner)
   right   the general right hand (`right_mixed`) trained further on the group's picking, as written
   sync    a synchronizer of the two on the group's songs (paper Sec. 4)
   eval    every song of the group by the paper's rules: each hand alone, both before and after synchronization

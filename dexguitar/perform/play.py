@@ -28,6 +28,7 @@ import numpy as np
 
 from dexguitar import envs
 from dexguitar.learn import policy as PO
+from dexguitar.motion import feedforward as FF
 from dexguitar.motion.glcheck import INSTALL, NoGL
 from dexguitar.music import load_song
 from dexguitar.music import timeline as TL
@@ -56,7 +57,8 @@ def pair(left_dir, right_dir):
     PO.check_pair(lmeta, rmeta, layout, where=(str(left_dir), str(right_dir)))
     sync, norm = PO.init_synchronizer(jax.random.PRNGKey(0), left, right, layout)
     params = {"policy": sync, "obs_norm": norm, "frozen": {"left": left, "right": right}}
-    return PO.unsynchronized(params), PO.PolicySpec("synchronizer", "duet", 2 * lmeta["action_size"], layout)
+    return PO.unsynchronized(params), PO.PolicySpec("synchronizer", "duet", 2 * lmeta["action_size"], layout,
+                                                    PO.PolicySpec.from_meta(lmeta).feedforward)
 
 
 # ---------------------------------------------------------------------------------------------------- recording
@@ -71,7 +73,8 @@ def play(song, params, spec: PO.PolicySpec, *, seconds: float | None = None, env
     Steps are mapped to window rows by the rows' durations (a sequential window is played row after row from
     step 0), not by `song_note`, so a grace rest the env may put before the song (row 0, song note -1) is handled
     whether it is there or not."""
-    env = envs.make("duet", [TL.from_song(song)], env_config or envs.EnvConfig().evaluation())
+    config = spec.env_config(env_config or envs.EnvConfig().evaluation())
+    env = envs.make("duet", FF.prepare([TL.from_song(song)], config), config)
     if not env.config.sequential:
         raise ValueError("play needs an evaluation config (EnvConfig().evaluation()): whole songs from the start")
     key = jax.random.PRNGKey(0) if key is None else key

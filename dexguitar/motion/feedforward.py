@@ -1,0 +1,180 @@
+"""The planner's motion of a whole song, as a feedforward that a residual left-hand policy corrects.
+
+Why: the IK planner (`motion.planner`, no learning) plays the authors' songs at a mean left F1 of 0.87
+(results/scripted_official.md), while PPO from the home pose needs minutes per song and 2e8 samples for a general hand
+that still plays them at 0.19. With `EnvConfig(feedforward=True)` the env adds the planner's action of the current
+song frame to the left hand's action, so a policy whose output starts at zero starts as the planner, and PPO only
+learns the corrections (residual RL). Training windows start in the planned state of their first frame (reference
+state initialization) and end with their last note, so the feedforward always belongs to the notes being played.
+
+A `Plan` lives in `Timeline.plan` (song-frame indexed: frame 0 is the grace rest before the first note, as in a
+sequential window), so it travels with the songs into every jitted program as an argument. Planning takes seconds per
+song on one CPU core; `attach` plans in parallel processes and keeps each plan in a disk cache keyed by the song's
+notes and timing.
+"""
+from __future__ import annotations
+
+import concurrent.futures as futures
+import hashlib
+import multiprocessing
+import os
+import time
+import warnings
+from pathlib import Path
+
+import jax
+import numpy as np
+from flax import struct
+
+from dexguitar.world import hands as H
+
+VERSION = 1                       # bump when the planner's output changes: the disk cache is keyed by it
+MIN_FRAMES = 1024                 # frame capacities are powers of two of at least this (few compiled shapes)
+
+
+@struct.dataclass
+class Plan:
+    """Per song (leading axis in a batch): the left hand's planned env action and state at every song frame."""
+
+    action: jax.Array      # float32 (F, 27) env action (a half-range units offset from the home pose)
+    qpos: jax.Array        # float32 (F, 27) joint positions at the start of each frame
+    qvel: jax.Array        # float32 (F, 27) joint velocities at the start of each frame
+    frames: jax.Array      # int32 () planned frames (rows beyond repeat the last one)
+
+
+def cache_dir() -> Path:
+    return Path(os.environ.get("DEXGUITAR_PLANS", Path.home() / ".cache" / "dexguitar" / "plans"))
+
+
+def _job_key(left, onset) -> str:
+    h = hashlib.sha256(f"v{VERSION}".encode())
+    h.update(np.ascontiguousarray(left, np.int32).tobytes())
+    h.update(np.ascontiguousarray(onset, np.int64).tobytes())
+    return h.hexdigest()[:24]
+
+
+_PLANNER: list = []
+
+
+def plan_notes(job) -> tuple[np.ndarray, np.ndarray]:
+    """(action (T, 27), qpos (T + 1, 27)) of the left planner for one `Notes` (left, pick, onset), from the home
+    pose. Runs in a worker process, which keeps its planner and IK caches between songs."""
+    from dexguitar.motion.planner import Notes, ScriptedLeft, Tracker
+    left, pick, onset = job
+    if not _PLANNER:
+        _PLANNER.extend([ScriptedLeft(), Tracker("left")])
+    hand, tracker = _PLANNER
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ctrl, q = tracker.track(hand.desired(Notes(left, pick, onset)))
+    return np.clip(tracker.to_action(ctrl), -1.0, 1.0).astype(np.float32), q.astype(np.float32)
+
+
+def in_processes(fn, jobs, workers: int = 0) -> tuple[list, int]:
+    """([fn(job) for job in jobs], processes used): on `workers` processes (0: one per CPU) with one BLAS thread
+    each (16 processes of 16 threads each ran at a load of 150 on 16 cores). `fn` must be a module-level function."""
+    workers = max(1, min(workers or os.cpu_count() or 1, len(jobs)))
+    if workers == 1:
+        return [fn(j) for j in jobs], 1
+    ctx = multiprocessing.get_context("spawn")          # the parent runs JAX threads: never fork it
+    threads = {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
+    os.environ.update({k: "1" for k in threads})
+    try:
+        with futures.ProcessPoolExecutor(workers, mp_context=ctx) as pool:
+            return list(pool.map(fn, jobs, chunksize=max(1, len(jobs) // (8 * workers)))), workers
+    finally:
+        for k, v in threads.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+def plan_all(jobs, workers: int = 0, log=print) -> list[tuple[np.ndarray, np.ndarray]]:
+    """`plan_notes` of every job, in parallel processes."""
+    t0 = time.time()
+    out, used = in_processes(plan_notes, jobs, workers)
+    log(f"planned {len(jobs)} songs ({sum(len(a) for a, _ in out):,} frames) in {time.time() - t0:.0f} s "
+        f"on {used} processes")
+    return out
+
+
+def song_notes(songs, i: int, rest_frames: int):
+    """The planner's `Notes` of song i of a batch played whole: the grace rest, then every note at its written
+    tempo (the rows and frames of a sequential window)."""
+    from dexguitar.motion.planner import Notes
+    n = int(songs.n_notes[i])
+    onset = np.asarray(songs.onset[i][:n + 1], np.int64) + rest_frames
+    left = np.concatenate([np.zeros((1, 6), np.int32), np.asarray(songs.left[i][:n], np.int32)])
+    pick = np.concatenate([np.zeros((1, 6), bool), np.asarray(songs.pick[i][:n], bool)])
+    return Notes(left, pick, np.concatenate([[0], onset]))
+
+
+def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, log=print):
+    """The song batch (`timeline.batch`/`stack`) with a `Plan` per song; empty songs get a plan of the home pose.
+    Plans come from the disk cache where they were made before."""
+    from dexguitar.music.timeline import capacity
+    S = int(np.shape(songs.n_notes)[0])
+    notes = [song_notes(songs, i, rest_frames) if int(songs.n_notes[i]) > 0 else None for i in range(S)]
+    keys = [_job_key(n.left, n.onset) if n is not None else None for n in notes]
+    cache = cache_dir()
+    found = {}
+    for k in set(filter(None, keys)):
+        f = cache / f"{k}.npz"
+        if f.exists():
+            with np.load(f) as z:
+                found[k] = (z["action"], z["qpos"])
+    todo = sorted({k for k in keys if k is not None and k not in found})
+    if todo:
+        jobs = {k: notes[keys.index(k)] for k in todo}
+        made = plan_all([(n.left, n.pick, n.onset) for n in jobs.values()], workers, log)
+        cache.mkdir(parents=True, exist_ok=True)
+        for k, (a, q) in zip(todo, made):
+            found[k] = (a, q)
+            tmp = cache / f"{k}.tmp.npz"
+            np.savez(tmp, action=a, qpos=q)
+            tmp.replace(cache / f"{k}.npz")
+    F = capacity(max((len(found[k][0]) for k in found), default=1), MIN_FRAMES)
+    flip = H.mirror_qpos(np.ones(H.N_DOF), "left") if mirror else np.ones(H.N_DOF, np.float32)
+    act, qpos, qvel, frames = [], [], [], []
+    for k in keys:
+        if k is None:
+            a, q = np.zeros((1, H.N_DOF), np.float32), _home_qpos()[None]
+            q = np.concatenate([q, q])
+        else:
+            a, q = found[k]
+        v = np.diff(q, axis=0) * 60.0                    # velocity over the frame before (control rate 60 Hz)
+        v = np.concatenate([np.zeros((1, H.N_DOF)), v[:-1]])
+        q = q[:-1]
+        T = len(a)
+        frames.append(T)
+        act.append(_extend(a, F) * flip)
+        qpos.append(_extend(q, F) * flip)
+        qvel.append(_extend(v, F) * flip)
+    plan = Plan(action=jax.device_put(np.stack(act).astype(np.float32)),
+                qpos=jax.device_put(np.stack(qpos).astype(np.float32)),
+                qvel=jax.device_put(np.stack(qvel).astype(np.float32)),
+                frames=jax.device_put(np.asarray(frames, np.int32)))
+    return songs.replace(plan=plan)
+
+
+def prepare(songs, config):
+    """Songs (a list of `Song`s or timelines, or a batch) as an env of `config` (an `EnvConfig` or None) reads them:
+    stacked, with the plans attached where `config.feedforward` asks for them."""
+    from dexguitar.music import timeline as TL
+    if isinstance(songs, (list, tuple)):
+        songs = TL.stack([s if isinstance(s, TL.Timeline) else TL.from_song(s) for s in songs])
+    if config is not None and config.feedforward and songs.plan is None:
+        songs = attach(songs, config.rest_frames, config.mirror)
+    return songs
+
+
+def _extend(x: np.ndarray, frames: int) -> np.ndarray:
+    """Rows to `frames`: cut, or padded with the last row (the hand holds its last pose after the song)."""
+    x = np.asarray(x)[:frames]
+    return np.concatenate([x, np.repeat(x[-1:], frames - len(x), 0)])
+
+
+def _home_qpos() -> np.ndarray:
+    from dexguitar.world import scene as S
+    return np.asarray(S.home_qpos("left"), np.float32)

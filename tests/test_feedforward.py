@@ -1,0 +1,97 @@
+"""The left hand as a residual on the planner (`EnvConfig(feedforward=True)`, `motion/feedforward.py`): a zero residual
+must play exactly as the scripted player does, and a training window must start in its planned state and read the
+plan frame by frame, or the feedforward belongs to other notes than the ones being played."""
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from dexguitar import envs
+from dexguitar.learn import policy as PO
+from dexguitar.motion import feedforward as FF
+from dexguitar.motion.planner import ScriptedPlayer
+from dexguitar.music import cursor as CU
+from dexguitar.music import timeline as TL
+from dexguitar.perform.evaluate import evaluate
+from test_scripted import MELODY, melody
+
+
+@pytest.fixture(scope="module")
+def plans(tmp_path_factory, monkeypatch_module):
+    monkeypatch_module.setenv("DEXGUITAR_PLANS", str(tmp_path_factory.mktemp("plans")))
+    return [TL.from_song(melody())]
+
+
+@pytest.fixture(scope="module")
+def monkeypatch_module():
+    with pytest.MonkeyPatch.context() as mp:
+        yield mp
+
+
+def zero_residual(env) -> tuple[dict, PO.PolicySpec]:
+    spec = PO.PolicySpec("policy", "left", env.action_size, env.layout, feedforward=True)
+    params = PO.template(spec)
+    params["obs_norm"]["var"] = np.ones_like(params["obs_norm"]["var"])
+    return params, spec
+
+
+def test_zero_residual_plays_as_the_scripted_player(plans):
+    config = envs.EnvConfig().evaluation()
+    scripted = ScriptedPlayer(envs.make("left", plans, config)).play(0)["left"]
+    env = envs.make("left", plans, config)
+    params, spec = zero_residual(env.env)
+    played = evaluate(params, spec, [melody()])["scripted test melody"]
+    assert played["summary"]["left"]["notes"] == sum(fret > 0 for _, fret in MELODY)     # open strings: no press
+    assert played["summary"]["left"]["f1"] == pytest.approx(scripted["f1"], abs=1e-6)
+    assert scripted["f1"] >= 0.95
+
+
+def test_window_starts_in_its_planned_state_and_reads_one_frame_per_step(plans):
+    config = envs.EnvConfig(feedforward=True, shift_prob=0.0, tempo_prob=0.0)
+    env = envs.make("left", FF.prepare(plans, config), config)
+    core = env.env.env                                  # AutoReset(ChainWindows(LeftEnv))
+    assert core.planned
+    plan = core.songs.plan
+    j = np.asarray(core.hands[0].qpos)
+    for seed in range(3):
+        state = env.reset(jax.random.PRNGKey(seed))
+        window = state.cursor.window
+        start = int(window.start)
+        # row 0 is the rest before note `first`, which the plan (a grace rest, then the song) starts at its onset +
+        # rest_frames: so the window starts at the note's onset
+        assert start == int(core.songs.onset[0][int(window.first)])
+        np.testing.assert_allclose(np.asarray(state.body.data.qpos)[j], np.asarray(plan.qpos[0, start]), atol=1e-6)
+        ff = np.asarray(core.feedforward(state.cursor))
+        np.testing.assert_array_equal(ff, np.asarray(plan.action[0, start]))
+        for k in range(1, 4):
+            state = env.step(state, jnp.zeros(env.action_size))
+            if bool(state.done):
+                break
+            assert int(CU.song_frame(state.cursor)) == start + k
+            np.testing.assert_array_equal(np.asarray(core.feedforward(state.cursor)),
+                                          np.asarray(plan.action[0, start + k]))
+
+
+def test_plans_come_from_the_disk_cache_the_second_time(plans, tmp_path, monkeypatch):
+    monkeypatch.setenv("DEXGUITAR_PLANS", str(tmp_path))
+    made = []
+    first = FF.attach(TL.stack(plans), log=made.append)
+    assert len(made) == 1 and len(list(tmp_path.glob("*.npz"))) == 1
+    again = FF.attach(TL.stack(plans), log=made.append)
+    assert len(made) == 1                               # the second time: read, not planned
+    np.testing.assert_array_equal(np.asarray(first.plan.action), np.asarray(again.plan.action))
+    assert first.plan.action.shape[1] >= FF.MIN_FRAMES and int(first.plan.frames[0]) > 0
+    assert np.all(np.abs(np.asarray(first.plan.action)) <= 1.0)
+
+
+def test_the_residual_flag_travels_with_the_policy():
+    env = envs.make("left", [TL.from_song(melody())], envs.EnvConfig())
+    _, spec = zero_residual(env.env)
+    again = PO.PolicySpec.from_meta(spec.to_meta())
+    assert again.feedforward and again.env_config(envs.EnvConfig()).feedforward
+    plain = PO.PolicySpec("policy", "left", env.action_size, env.layout)
+    assert "feedforward" not in plain.to_meta() and not PO.PolicySpec.from_meta(plain.to_meta()).feedforward
+    with pytest.raises(ValueError, match="no left hand"):
+        envs.make("right", [TL.from_song(melody())], envs.EnvConfig(feedforward=True))
+    with pytest.raises(ValueError, match="feedforward.prepare"):        # plans are not made behind the env's back
+        envs.make("left", [TL.from_song(melody())], envs.EnvConfig(feedforward=True))
