@@ -53,22 +53,23 @@ def test_window_starts_in_its_planned_state_and_reads_one_frame_per_step(plans):
     assert core.planned
     plan = core.songs.plan
     j = np.asarray(core.hands[0].qpos)
+    reset, step, feedforward = jax.jit(env.reset), jax.jit(env.step), jax.jit(core.feedforward)
     for seed in range(3):
-        state = env.reset(jax.random.PRNGKey(seed))
+        state = reset(jax.random.PRNGKey(seed))
         window = state.cursor.window
         start = int(window.start)
         # row 0 is the rest before note `first`, which the plan (a grace rest, then the song) starts at its onset +
         # rest_frames: so the window starts at the note's onset
         assert start == int(core.songs.onset[0][int(window.first)])
         np.testing.assert_allclose(np.asarray(state.body.data.qpos)[j], np.asarray(plan.qpos[0, start]), atol=1e-6)
-        ff = np.asarray(core.feedforward(state.cursor))
+        ff = np.asarray(feedforward(state.cursor))
         np.testing.assert_array_equal(ff, np.asarray(plan.action[0, start]))
         for k in range(1, 4):
-            state = env.step(state, jnp.zeros(env.action_size))
+            state = step(state, jnp.zeros(env.action_size))
             if bool(state.done):
                 break
             assert int(CU.song_frame(state.cursor)) == start + k
-            np.testing.assert_array_equal(np.asarray(core.feedforward(state.cursor)),
+            np.testing.assert_array_equal(np.asarray(feedforward(state.cursor)),
                                           np.asarray(plan.action[0, start + k]))
 
 
