@@ -1,0 +1,28 @@
+"""A residual left hand whose residual is zero (`EnvConfig(feedforward=True)`: it plays exactly as the IK planner), as
+an exported policy: the start of every residual left hand, and the yardstick of a general one (issue 11), since the
+planner has seen no song.
+
+    .venv/bin/python experiments/zero_residual.py /tmp/zero_residual
+    .venv/bin/python experiments/general_left.py --left /tmp/zero_residual --notes ../shared/data/official/notes \
+        --out experiments/results/general_left/zero_residual
+"""
+import sys
+
+import numpy as np
+
+from dexguitar.envs import EnvConfig, make
+from dexguitar.learn import policy as PO
+from dexguitar.music import library
+
+
+def main(out: str) -> None:
+    env = make("left", [library.load("ode_to_joy")], EnvConfig()).env.env    # for its layout and action size only
+    spec = PO.PolicySpec("policy", "left", env.action_size, env.layout, feedforward=True)
+    params = PO.template(spec)                                                # every weight zero: mu = 0
+    params["obs_norm"]["var"] = np.ones_like(params["obs_norm"]["var"])
+    PO.export(out, params, dict(spec.to_meta(), iteration=0, samples=0))
+    print(f"wrote {out}: a zero residual on the planner")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])
