@@ -18,8 +18,7 @@ def make(hand: str, songs, config: EnvConfig | None = None, backend: str = "jax"
     played through."""
     if hand not in ENVS:
         raise ValueError(f"unknown hand {hand!r}; expected one of {', '.join(ENVS)}")
-    if isinstance(songs, (list, tuple)):
-        songs = TL.stack([s if isinstance(s, TL.Timeline) else TL.from_song(s) for s in songs])
+    songs = as_batch(songs)
     config = dataclasses.replace(config or EnvConfig(episode_frames=1200 if hand == "duet" else 600), **overrides)
     if config.feedforward and "left" not in ENVS[hand].roles:
         raise ValueError(f"EnvConfig.feedforward is the left hand's planned motion; the {hand} env has no left hand")
@@ -30,5 +29,12 @@ def make(hand: str, songs, config: EnvConfig | None = None, backend: str = "jax"
     return PlayThrough(env) if config.sequential else AutoReset(ChainWindows(env))
 
 
-__all__ = ["EnvConfig", "GuitarEnv", "State", "Body", "Picking", "Task", "ObsLayout", "LeftEnv", "RightEnv",
+def as_batch(songs) -> TL.Timeline:
+    """A song batch: a list of `Song`s or timelines stacked, a batch as it is."""
+    if isinstance(songs, (list, tuple)):
+        return TL.stack([s if isinstance(s, TL.Timeline) else TL.from_song(s) for s in songs])
+    return songs
+
+
+__all__ = ["as_batch", "EnvConfig", "GuitarEnv", "State", "Body", "Picking", "Task", "ObsLayout", "LeftEnv", "RightEnv",
            "DuetEnv", "ENVS", "make", "Wrapper", "ChainWindows", "AutoReset", "PlayThrough"]

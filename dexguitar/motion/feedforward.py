@@ -27,6 +27,7 @@ import numpy as np
 from flax import struct
 
 from dexguitar.world import hands as H
+from dexguitar.world import scene
 
 VERSION = 1                       # bump when the planner's output changes: the disk cache is keyed by it
 MIN_FRAMES = 1024                 # frame capacities are powers of two of at least this (few compiled shapes)
@@ -143,7 +144,7 @@ def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, 
             q = np.concatenate([q, q])
         else:
             a, q = found[k]
-        v = np.diff(q, axis=0) * 60.0                    # velocity over the frame before (control rate 60 Hz)
+        v = np.diff(q, axis=0) * scene.CONTROL_HZ        # velocity over the frame before
         v = np.concatenate([np.zeros((1, H.N_DOF)), v[:-1]])
         q = q[:-1]
         T = len(a)
@@ -161,9 +162,8 @@ def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, 
 def prepare(songs, config):
     """Songs (a list of `Song`s or timelines, or a batch) as an env of `config` (an `EnvConfig` or None) reads them:
     stacked, with the plans attached where `config.feedforward` asks for them."""
-    from dexguitar.music import timeline as TL
-    if isinstance(songs, (list, tuple)):
-        songs = TL.stack([s if isinstance(s, TL.Timeline) else TL.from_song(s) for s in songs])
+    from dexguitar.envs import as_batch
+    songs = as_batch(songs)
     if config is not None and config.feedforward and songs.plan is None:
         songs = attach(songs, config.rest_frames, config.mirror)
     return songs
@@ -176,5 +176,4 @@ def _extend(x: np.ndarray, frames: int) -> np.ndarray:
 
 
 def _home_qpos() -> np.ndarray:
-    from dexguitar.world import scene as S
-    return np.asarray(S.home_qpos("left"), np.float32)
+    return np.asarray(scene.home_qpos("left"), np.float32)
