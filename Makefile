@@ -8,9 +8,9 @@ STAMP := $(VENV)/.installed-stamp
 SONG ?= ode_to_joy
 CONFIG_LEFT ?= experiments/left_gpu.py
 CONFIG_RIGHT ?= experiments/right_gpu.py
-CONFIG_SYNC ?= experiments/sync_gpu.py
-LEFT ?= models/policies/left_$(SONG)
-RIGHT ?= models/policies/right_patterns
+CONFIG_SYNC ?= experiments/sync_songs.py
+LEFT ?= models/policies/left_general     # make sync: the general pair (GSync) unless LEFT=/RIGHT= name others
+RIGHT ?= models/policies/right_mixed
 OUT ?= runs
 JOBS ?= 2                      # test processes (compilation is single-threaded: one per core)
 
@@ -43,14 +43,14 @@ train-left: $(STAMP)           ## make train-left SONG="ode_to_joy twinkle" [MOT
 	$(BIN)/dexguitar train --hand left --song $(SONG) --config $(CONFIG_LEFT) \
 	  --out $(OUT)/left-$(firstword $(notdir $(SONG))) $(if $(MOTION),--motion $(MOTION)) $(if $(RESUME),--resume)
 
-train-left-general: $(STAMP)   ## the general-purpose left hand on balanced procedural material [RESUME=1] [DEVICES=n]
-	$(BIN)/dexguitar train --hand left --style general --config experiments/left_general.py \
+train-left-general: $(STAMP)   ## the general left hand: a residual on the planner, balanced procedural material [RESUME=1]
+	$(BIN)/dexguitar train --hand left --style general --procedural 256 --config experiments/left_general_residual.py \
 	  --out $(OUT)/left-general $(if $(RESUME),--resume) $(if $(DEVICES),--devices $(DEVICES))
 
 train-right: $(STAMP)          ## procedural picking and strumming patterns
 	$(BIN)/dexguitar train --hand right --config $(CONFIG_RIGHT) --out $(OUT)/right $(if $(RESUME),--resume)
 
-sync: $(STAMP)                 ## make sync SONG=strum_g_c_d [LEFT=dir] [RIGHT=dir] [RESUME=1]: both hands in time
+sync: $(STAMP)                 ## make sync SONG=tab [LEFT=dir] [RIGHT=dir] [RESUME=1]: both hands in time (GSync default)
 	$(BIN)/dexguitar sync --song $(SONG) --left $(LEFT) --right $(RIGHT) --config $(CONFIG_SYNC) \
 	  --out $(OUT)/sync-$(firstword $(notdir $(SONG))) $(if $(RESUME),--resume)
 

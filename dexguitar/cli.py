@@ -188,8 +188,11 @@ def _sync(args) -> int:
     if args.resume and (out / "config.json").exists() and not (left and right):
         recorded = json.loads((out / "config.json").read_text())
         left, right = left or recorded.get("left"), right or recorded.get("right")
+    if not (left or right) and not args.resume:        # GSync: the general pair (issue 11)
+        left, right = _general_pair("sync")
     if not (left and right):
-        raise UserError("sync: give --left and --right (exported policies or run directories)")
+        raise UserError("sync: give --left and --right (exported policies or run directories), or neither for the "
+                        "general pair")
     cfg, env_cfg = load_config(args.config, hand="duet", num_envs=args.envs, seed=args.seed,
                                iterations=args.iterations)
     check_out(out, args.resume)
@@ -278,12 +281,16 @@ def _eval(args) -> int:
 GENERAL = {"left": POLICIES / "left_general", "right": POLICIES / "right_mixed"}   # the general pair (issue 11)
 
 
+def _general_pair(command: str) -> tuple[str, str]:
+    if not (GENERAL["left"] / "policy.json").exists():
+        raise UserError(f"{command}: no general left hand at {GENERAL['left']} (train one with "
+                        "`make train-left-general`); give --left and --right")
+    return str(GENERAL["left"]), str(GENERAL["right"])
+
+
 def _play(args) -> int:
     if not (args.ckpt or args.left or args.right):          # any tab, played by the general pair
-        if not (GENERAL["left"] / "policy.json").exists():
-            raise UserError("play: no general left hand is shipped yet (train one with `make train-left-general`); "
-                            "give --ckpt SYNC or --left and --right")
-        args.left, args.right = str(GENERAL["left"]), str(GENERAL["right"])
+        args.left, args.right = _general_pair("play")
     if bool(args.ckpt) == bool(args.left or args.right) or (not args.ckpt and not (args.left and args.right)):
         raise UserError("play: give either --ckpt SYNC or both --left and --right")
     if args.ckpt:
@@ -400,7 +407,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("sync", help="synchronize a frozen left and right policy on songs (Sec. 4); resumable")
     p.add_argument("--song", nargs="+", required=True, help="tab files or embedded song names")
-    p.add_argument("--left", help="exported left-hand policy or run directory (taken from --out on --resume)")
+    p.add_argument("--left", help="exported left-hand policy or run directory (taken from --out on --resume; "
+                                  "neither --left nor --right: the general pair, models/policies/left_general and "
+                                  "right_mixed)")
     p.add_argument("--right", help="exported right-hand policy or run directory (taken from --out on --resume)")
     p.add_argument("--motion", help="left-hand reference motion for the discriminators (default: the shipped clip)")
     _add_run_args(p, "run directory (checkpoints, metrics.jsonl, policy/, eval.json)")

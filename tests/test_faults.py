@@ -232,3 +232,17 @@ def test_impossible_numbers_are_refused_by_the_parser(argv, capsys):
     with pytest.raises(SystemExit) as exit_:
         main(argv + ["--out", "x"])
     assert exit_.value.code == 2 and "must be" in capsys.readouterr().err
+
+
+def test_sync_and_play_without_policies_take_the_general_pair(tmp_path, monkeypatch, capsys):
+    from dexguitar import cli
+    from dexguitar.motion.planner import LATEST
+    assert cli._general_pair("sync") == (str(cli.POLICIES / "left_general"), str(cli.POLICIES / "right_mixed"))
+    meta = json.loads((cli.POLICIES / "left_general" / "policy.json").read_text())
+    assert meta["hand"] == "left" and meta["feedforward"] == LATEST        # a residual on the latest planner
+    monkeypatch.setitem(cli.GENERAL, "left", tmp_path / "none")          # a checkout without it
+    for argv in (["sync", "--song", "ode_to_joy", "--out", str(tmp_path / "s")],
+                 ["play", "--song", "ode_to_joy", "--out", str(tmp_path / "p")]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "no general left hand" in err[0] and "--left and --right" in err[0], err

@@ -1,4 +1,4 @@
-"""The left hand as a residual on the planner (`EnvConfig(feedforward=True)`, `motion/feedforward.py`): a zero residual
+"""The left hand as a residual on the planner (`EnvConfig(feedforward=FF.LATEST)`, `motion/feedforward.py`): a zero residual
 must play exactly as the scripted player does, and a training window must start in its planned state and read the
 plan frame by frame, or the feedforward belongs to other notes than the ones being played."""
 import jax
@@ -29,7 +29,7 @@ def monkeypatch_module():
 
 
 def zero_residual(env) -> tuple[dict, PO.PolicySpec]:
-    spec = PO.PolicySpec("policy", "left", env.action_size, env.layout, feedforward=True)
+    spec = PO.PolicySpec("policy", "left", env.action_size, env.layout, feedforward=FF.LATEST)
     params = PO.template(spec)
     params["obs_norm"]["var"] = np.ones_like(params["obs_norm"]["var"])
     return params, spec
@@ -47,7 +47,7 @@ def test_zero_residual_plays_as_the_scripted_player(plans):
 
 
 def test_window_starts_in_its_planned_state_and_reads_one_frame_per_step(plans):
-    config = envs.EnvConfig(feedforward=True, shift_prob=0.0, tempo_prob=0.0)
+    config = envs.EnvConfig(feedforward=FF.LATEST, shift_prob=0.0, tempo_prob=0.0)
     env = envs.make("left", FF.prepare(plans, config), config)
     core = env.env.env                                  # AutoReset(ChainWindows(LeftEnv))
     assert core.planned
@@ -80,6 +80,8 @@ def test_plans_come_from_the_disk_cache_the_second_time(plans, tmp_path, monkeyp
     assert len(made) == 1 and len(list(tmp_path.glob("*.npz"))) == 1
     again = FF.attach(TL.stack(plans), log=made.append)
     assert len(made) == 1                               # the second time: read, not planned
+    FF.attach(TL.stack(plans), log=made.append, version=1)
+    assert len(made) == 2 and len(list(tmp_path.glob("*.npz"))) == 2     # another planner: another plan
     np.testing.assert_array_equal(np.asarray(first.plan.action), np.asarray(again.plan.action))
     assert first.plan.action.shape[1] >= FF.MIN_FRAMES and int(first.plan.frames[0]) > 0
     assert np.all(np.abs(np.asarray(first.plan.action)) <= 1.0)
@@ -89,7 +91,9 @@ def test_the_residual_flag_travels_with_the_policy():
     env = envs.make("left", [TL.from_song(melody())], envs.EnvConfig())
     _, spec = zero_residual(env.env)
     again = PO.PolicySpec.from_meta(spec.to_meta())
-    assert again.feedforward and again.env_config(envs.EnvConfig()).feedforward
+    assert again.feedforward == FF.LATEST == again.env_config(envs.EnvConfig()).feedforward
+    legacy = dict(spec.to_meta(), feedforward=True)                   # the first residuals: planner version 1
+    assert PO.PolicySpec.from_meta(legacy).feedforward == 1
     plain = PO.PolicySpec("policy", "left", env.action_size, env.layout)
     assert "feedforward" not in plain.to_meta() and not PO.PolicySpec.from_meta(plain.to_meta()).feedforward
     with pytest.raises(ValueError, match="no left hand"):

@@ -63,3 +63,41 @@ def test_pick_strokes_alternate_on_one_string(timeline):
     assert len(strokes) == len(MELODY)
     # notes 4-6 repeat string 1: down, up, down (or the reverse)
     assert strokes[4] == -strokes[5] == strokes[6]
+
+
+def test_a_chord_the_rule_cannot_hold_gets_a_searched_fingering():
+    """Strings 3 and 4 at fret 2 right after a note at fret 1 (come_as_you_are, note 51): the one-finger-per-fret
+    rule keeps position 1 and sends the ring finger back from its own fret 3, where the middle finger is in its way;
+    the searched fingering plays the chord. Judged on the whole tracked motion in MuJoCo C (not the search's own
+    short trial): the chord's strings pressed at fret 2, string 5 open, for 2/3 of the note."""
+    from dexguitar.motion.planner import Tracker, _pressed
+    goal = np.array([[0, 0, 0, 0, 1, 0], [0, 0, 2, 2, -1, 0]])     # timeline goals: k press, -1 open, 0 free
+    notes = Notes(goal, goal != 0, np.array([0, 30, 60]))
+    tracker = Tracker("left")
+
+    def held(hand):
+        _, q = tracker.track(hand.desired(notes))
+        ok = []
+        for row in q[31:61]:                                        # the states during the chord's 30 frames
+            hand.kin.set(row)
+            press = _pressed(hand.kin.segments())
+            ok.append(press[2] == 2 and press[3] == 2 and press[4] == 0)
+        return np.mean(ok)
+
+    rule, searched = ScriptedLeft(version=1), ScriptedLeft()
+    assert rule.fingering(notes)[1] == (1, {1: (3, 2), 2: (2, 2)})
+    assert searched.fingering(notes)[1] != rule.fingering(notes)[1]
+    assert held(rule) < 2 / 3
+    assert held(searched) >= 2 / 3
+
+
+def test_version_3_is_quicker_between_short_notes_only(timeline):
+    """Planner version 3 lifts and lands fingers faster between notes shorter than 7 frames (flight_of_the_bumblebee1:
+    5-frame notes, left F1 0.49 -> 0.75 zero-shot); every motion around longer notes is version 2's."""
+    notes = Notes(np.asarray(timeline.left), np.asarray(timeline.pick), np.asarray(timeline.onset))   # 15 frames
+    np.testing.assert_array_equal(ScriptedLeft(3).desired(notes), ScriptedLeft(2).desired(notes))
+    fast = Notes(notes.left, notes.pick, np.concatenate([[0], 10 + 5 * np.arange(1, notes.n + 1)]))
+    v2, v3 = ScriptedLeft(2).desired(fast), ScriptedLeft(3).desired(fast)
+    assert not np.allclose(v2, v3)
+    with pytest.raises(ValueError, match="no left planner version 4"):
+        ScriptedLeft(4)

@@ -61,7 +61,8 @@ class EnvConfig:
     sequential: bool = False             # evaluation: whole songs from the start, episode ends with the song
     ready_after: int = -1                # duet gate: -1 = the paper's strict gate; k >= 0 = relaxed after k frames
     mirror: bool = False                 # the left-handed player's scene
-    feedforward: bool = False            # the left action is a residual on the planner's (`motion.feedforward`)
+    feedforward: int = 0                 # the left action is a residual on the planner's (`motion.feedforward`)
+                                         # of this version (`motion.planner.LATEST`; True = 1); 0: none
 
     def evaluation(self) -> "EnvConfig":
         return dataclasses.replace(self, sequential=True, shift_prob=0.0, tempo_prob=0.0, pick_depth=0.0,

@@ -39,13 +39,13 @@ class PolicySpec:
     hand: str                 # "left", "right" or "duet"
     action_size: int
     layout: ObsLayout
-    feedforward: bool = False  # the left hand's action is a residual on the planner's (`motion.feedforward`)
+    feedforward: int = 0      # the left hand's action is a residual on the planner's of this version (0: none)
 
     def hand_spec(self, i: int) -> "PolicySpec":
         """The single-hand policy of hand i of a synchronizer."""
         role = self.layout.roles[i]
         return PolicySpec("policy", role, self.action_size // self.layout.hands, self.layout.one_hand(i),
-                          self.feedforward and role == "left")
+                          self.feedforward if role == "left" else 0)
 
     def env_config(self, config):
         """`config` (an `EnvConfig`) as this policy must be played in: on the planner's feedforward or not."""
@@ -54,7 +54,7 @@ class PolicySpec:
     def to_meta(self) -> dict:
         return {"kind": self.kind, "hand": self.hand, "action_size": self.action_size,
                 "layout": self.layout.to_dict(), "obs_size": self.layout.obs_size,
-                "goal_size": self.layout.goal_size} | ({"feedforward": True} if self.feedforward else {})
+                "goal_size": self.layout.goal_size} | ({"feedforward": int(self.feedforward)} if self.feedforward else {})
 
     @classmethod
     def from_meta(cls, meta: dict) -> "PolicySpec":
@@ -65,7 +65,7 @@ class PolicySpec:
             goal = meta["goal_size"] // len(roles)
             layout = ObsLayout(roles, 2, (meta["obs_size"] - meta["goal_size"]) // (2 * len(roles)), goal, 6)
         return cls(meta.get("kind", "policy"), meta["hand"], meta["action_size"], layout,
-                   bool(meta.get("feedforward", False)))
+                   int(meta.get("feedforward", 0)))         # true (the first residuals) = version 1
 
 
 # ----------------------------------------------------------------------------------------------------- acting

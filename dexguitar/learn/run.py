@@ -181,14 +181,14 @@ def export(trainer: Trainer, state, directory) -> None:
     PO.export(directory, trainer.actor_params(state.params, state.obs_norm), meta)
 
 
-def check_init(init_from, hand: str, feedforward: bool) -> tuple[dict, dict]:
+def check_init(init_from, hand: str, feedforward: int) -> tuple[dict, dict]:
     """(params, meta) of the exported policy that a run of `hand` starts from, if it can: a policy of that hand, and
     a residual on the planner exactly when the run trains one (`EnvConfig.feedforward`)."""
     params, meta = PO.load(init_from)
     if meta.get("hand") != hand or meta.get("kind", "policy") != "policy":
         raise UserError(f"--init-from {init_from}: a {meta.get('hand')} hand {meta.get('kind', 'policy')}, not a "
                         f"{hand} hand policy")
-    residual = PO.PolicySpec.from_meta(meta).feedforward
+    residual, feedforward = bool(PO.PolicySpec.from_meta(meta).feedforward), bool(feedforward)
     if residual != feedforward:
         what = {True: "a residual on the IK planner", False: "a plain policy"}
         raise UserError(f"--init-from {init_from}: {what[residual]}, but this run's ENV trains {what[feedforward]} "

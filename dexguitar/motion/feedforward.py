@@ -2,7 +2,7 @@
 
 Why: the IK planner (`motion.planner`, no learning) plays the authors' songs at a mean left F1 of 0.87
 (results/scripted_official.md), while PPO from the home pose needs minutes per song and 2e8 samples for a general hand
-that still plays them at 0.19. With `EnvConfig(feedforward=True)` the env adds the planner's action of the current
+that still plays them at 0.19. With `EnvConfig(feedforward=LATEST)` the env adds the planner's action of the current
 song frame to the left hand's action, so a policy whose output starts at zero starts as the planner, and PPO only
 learns the corrections (residual RL). Training windows start in the planned state of their first frame (reference
 state initialization) and end with their last note, so the feedforward always belongs to the notes being played.
@@ -26,10 +26,10 @@ import jax
 import numpy as np
 from flax import struct
 
+from dexguitar.motion.planner import LATEST   # planner versions (`EnvConfig.feedforward`); the disk cache is keyed by it
 from dexguitar.world import hands as H
 from dexguitar.world import scene
 
-VERSION = 1                       # bump when the planner's output changes: the disk cache is keyed by it
 MIN_FRAMES = 1024                 # frame capacities are powers of two of at least this (few compiled shapes)
 
 
@@ -47,24 +47,24 @@ def cache_dir() -> Path:
     return Path(os.environ.get("DEXGUITAR_PLANS", Path.home() / ".cache" / "dexguitar" / "plans"))
 
 
-def _job_key(left, onset) -> str:
-    h = hashlib.sha256(f"v{VERSION}".encode())
+def _job_key(left, onset, version: int) -> str:
+    h = hashlib.sha256(f"v{version}".encode())
     h.update(np.ascontiguousarray(left, np.int32).tobytes())
     h.update(np.ascontiguousarray(onset, np.int64).tobytes())
     return h.hexdigest()[:24]
 
 
-_PLANNER: list = []
+_PLANNERS: dict = {}
 
 
 def plan_notes(job) -> tuple[np.ndarray, np.ndarray]:
-    """(action (T, 27), qpos (T + 1, 27)) of the left planner for one `Notes` (left, pick, onset), from the home
-    pose. Runs in a worker process, which keeps its planner and IK caches between songs."""
+    """(action (T, 27), qpos (T + 1, 27)) of the left planner of a version for one `Notes` (left, pick, onset,
+    version), from the home pose. Runs in a worker process, which keeps its planner and IK caches between songs."""
     from dexguitar.motion.planner import Notes, ScriptedLeft, Tracker
-    left, pick, onset = job
-    if not _PLANNER:
-        _PLANNER.extend([ScriptedLeft(), Tracker("left")])
-    hand, tracker = _PLANNER
+    left, pick, onset, version = job
+    if version not in _PLANNERS:
+        _PLANNERS[version] = (ScriptedLeft(version), Tracker("left"))
+    hand, tracker = _PLANNERS[version]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ctrl, q = tracker.track(hand.desired(Notes(left, pick, onset)))
@@ -78,13 +78,14 @@ def in_processes(fn, jobs, workers: int = 0) -> tuple[list, int]:
     if workers == 1:
         return [fn(j) for j in jobs], 1
     ctx = multiprocessing.get_context("spawn")          # the parent runs JAX threads: never fork it
-    threads = {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
-    os.environ.update({k: "1" for k in threads})
+    saved = {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                                             "JAX_PLATFORMS")}
+    os.environ.update({k: "1" for k in saved} | {"JAX_PLATFORMS": "cpu"})   # the planner's JAX bits: CPU, not the GPU
     try:
         with futures.ProcessPoolExecutor(workers, mp_context=ctx) as pool:
             return list(pool.map(fn, jobs, chunksize=max(1, len(jobs) // (8 * workers)))), workers
     finally:
-        for k, v in threads.items():
+        for k, v in saved.items():
             if v is None:
                 os.environ.pop(k, None)
             else:
@@ -111,13 +112,13 @@ def song_notes(songs, i: int, rest_frames: int):
     return Notes(left, pick, np.concatenate([[0], onset]))
 
 
-def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, log=print):
-    """The song batch (`timeline.batch`/`stack`) with a `Plan` per song; empty songs get a plan of the home pose.
-    Plans come from the disk cache where they were made before."""
+def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, log=print, version: int = LATEST):
+    """The song batch (`timeline.batch`/`stack`) with a `Plan` per song by the planner of `version`; empty songs get
+    a plan of the home pose. Plans come from the disk cache where they were made before."""
     from dexguitar.music.timeline import capacity
     S = int(np.shape(songs.n_notes)[0])
     notes = [song_notes(songs, i, rest_frames) if int(songs.n_notes[i]) > 0 else None for i in range(S)]
-    keys = [_job_key(n.left, n.onset) if n is not None else None for n in notes]
+    keys = [_job_key(n.left, n.onset, version) if n is not None else None for n in notes]
     cache = cache_dir()
     found = {}
     for k in set(filter(None, keys)):
@@ -128,7 +129,7 @@ def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, 
     todo = sorted({k for k in keys if k is not None and k not in found})
     if todo:
         jobs = {k: notes[keys.index(k)] for k in todo}
-        made = plan_all([(n.left, n.pick, n.onset) for n in jobs.values()], workers, log)
+        made = plan_all([(n.left, n.pick, n.onset, version) for n in jobs.values()], workers, log)
         cache.mkdir(parents=True, exist_ok=True)
         for k, (a, q) in zip(todo, made):
             found[k] = (a, q)
@@ -165,7 +166,7 @@ def prepare(songs, config):
     from dexguitar.envs import as_batch
     songs = as_batch(songs)
     if config is not None and config.feedforward and songs.plan is None:
-        songs = attach(songs, config.rest_frames, config.mirror)
+        songs = attach(songs, config.rest_frames, config.mirror, version=int(config.feedforward))
     return songs
 
 

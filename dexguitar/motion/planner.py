@@ -9,7 +9,8 @@ each other (`perform.scripted` prints that table). The same motions, recorded, a
 How it plays, per hand, before the rollout (`ScriptedPlayer.plan`):
 1. Keyframes in the guitar frame. Left hand: one-finger-per-fret hand positions covering 4 frets; each note's
    target strings get a fingertip on p_{i,k} resting on the fretboard, the other fingers hover 10 mm above the
-   strings. Right hand: the pick sweeps from the gap before the first target string to the gap after the last,
+   strings (version 2 on: where that fingering does not hold a note in a short simulated trial, the cheapest
+   other one that does). Right hand: the pick sweeps from the gap before the first target string to the gap after the last,
    3 mm below string height, choosing the stroke direction that starts where the last one ended (alternate picking
    on one string), and hovers 6 mm above the strings in between.
 2. Joint targets by least squares on MuJoCo C kinematics (`motion.kinematics.HandKinematics`; cached per keyframe,
@@ -27,6 +28,8 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
+import itertools
 import time
 import warnings
 
@@ -114,10 +117,13 @@ class Tracker:
         assert m.nq == m.nv == m.nu, "hinges and slides only, one actuator per joint"
         assert all(m.actuator_trnid[i, 0] == i for i in range(m.nu)), "actuator i drives joint i"
 
-    def track(self, q_des: np.ndarray):
-        """q_des (T + 1, nq) with q_des[0] the start pose (the home keyframe). Returns ctrl (T, nu), q (T + 1, nq)."""
+    def track(self, q_des: np.ndarray, start: bool = False):
+        """q_des (T + 1, nq) with q_des[0] the start pose: the home keyframe, or q_des[0] at rest with `start`.
+        Returns ctrl (T, nu), q (T + 1, nq)."""
         m, d = self.model, self.data
         mujoco.mj_resetDataKeyframe(m, d, 0)
+        if start:
+            d.qpos[:] = q_des[0]
         mujoco.mj_forward(m, d)
         T, nu, nq = len(q_des) - 1, m.nu, m.nq
         v_des = np.gradient(q_des, DT, axis=0)
@@ -316,6 +322,11 @@ WRIST_THUMB = np.arange(11)                                    # wrist slides + 
 FINGER_DOFS = [np.arange(11 + 4 * f, 15 + 4 * f) for f in range(4)]
 POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fit_home's rest posture (left)
 
+# Versions of the left hand's plans (a residual policy keeps the one it was trained on: `EnvConfig.feedforward`):
+# 1 the one-finger-per-fret rule; 2 and a searched fingering where the rule's would not hold a note
+# (`ScriptedLeft.search_fingering`); 3 and quicker lifts and landings between notes shorter than 7 frames.
+LATEST = 3
+
 
 class ScriptedLeft:
     """The fretting hand: one finger per fret in a hand position covering 4 frets.
@@ -332,15 +343,23 @@ class ScriptedLeft:
     clearance = 0.0075      # pressing finger's parts from the other strings (soft)
     lift_frames = 5
     land_frames = 5
+    quick_frames = 3        # version 3: a lift or landing beside a note of n < 7 frames takes max(n - 2, this)
     shift_frames = 10       # hand position change (the wrist slides are slow: kp 10 on 0.2 kg)
     start_frames = 10       # from the home pose to the first note's position
+    search_limit = 40       # candidate fingerings tried per note, cheapest first
+    check_frames = 10       # a fingering is tried by moving to it from the note before, then holding this long
 
-    def __init__(self):
+    def __init__(self, version: int = LATEST):
+        if not 1 <= version <= LATEST:
+            raise ValueError(f"no left planner version {version} (1..{LATEST})")
+        self.version = version
         self.guitar = GUITAR
         self.kin = HandKinematics("left")
         self.posture = POSTURE
         self._positions: dict[int, np.ndarray] = {}
         self._fingers: dict[tuple, np.ndarray] = {}
+        self._holds: dict[tuple, bool] = {}
+        self._tracker = None
 
     # --- geometry helpers
     def fret_mid(self, k: int) -> float:
@@ -451,6 +470,9 @@ class ScriptedLeft:
                 f = max(f_prev + 1, min(k - p, 3 - (len(press) - 1 - j)))
                 fingers[f] = (-ms, k)
                 f_prev = f
+            before = next(((q, f) for q, f in reversed(out) if q is not None), None)
+            if self.version >= 2 and not self.holds(p, fingers, goal, before):
+                p, fingers = self.search_fingering(p, fingers, press, goal, before)
             out.append((p, fingers))
         first = next((q for q, _ in out if q is not None), 1)
         filled, last = [], first
@@ -458,6 +480,69 @@ class ScriptedLeft:
             last = q if q is not None else last
             filled.append((last, fingers))
         return filled
+
+    def pose(self, p: int, fingers: dict) -> np.ndarray:
+        """27 joint values of position p with `fingers` ({finger: (string, fret)}) pressing, the others hovering over
+        their own frets."""
+        g = self.guitar
+        q = self.position(p).copy()
+        for f in range(4):
+            if f in fingers:
+                s, k = fingers[f]
+                q[FINGER_DOFS[f]] = self.finger(f, p, _key(self.press_point(s, k, f)), True, s)
+            else:
+                k = min(p + f, g.n_frets)
+                q[FINGER_DOFS[f]] = self.finger(f, p, _key(self.hover_point(self.mid_x(k), k)), False)
+        return q
+
+    def holds(self, p: int, fingers: dict, goal, before=None) -> bool:
+        """Does this fingering press exactly what `goal` asks (the env's press detection), both as a static pose
+        and in simulation, reached from the pose of the note before (`before`: (position, fingers); None: this
+        position's hover pose) and held? Fingers collide with each other and with the strings, which the pose
+        alone does not show."""
+        before = before or (p, {})
+        key = (p, tuple(sorted(fingers.items())), tuple(int(x) for x in goal), before[0],
+               tuple(sorted(before[1].items())))
+        if key not in self._holds:
+            ok = lambda press: bool(np.all(np.where(goal > 0, press == goal, np.where(goal < 0, press == 0, True))))
+            q = self.pose(p, fingers)
+            self.kin.set(q)
+            good = ok(_pressed(self.kin.segments()))
+            if good:
+                if self._tracker is None:
+                    self._tracker = Tracker("left")
+                q0 = self.pose(*before)
+                move = self.land_frames if before[0] == p else self.shift_frames
+                s = min_jerk(np.arange(move + self.check_frames + 1) / move)[:, None]
+                _, qs = self._tracker.track(q0 + s * (q - q0), start=True)
+                self.kin.set(qs[-1])
+                good = ok(_pressed(self.kin.segments()))
+            self._holds[key] = good
+        return self._holds[key]
+
+    def search_fingering(self, p0: int, fingers0: dict, press: list, goal, before: tuple | None):
+        """The cheapest fingering that holds the note (`holds`), where the one-finger-per-fret rule's does not: hand
+        positions p whose 4 frets cover the note, any fingers in fret order, notes at one fret in either string
+        order. Cost: stretch (frets between a finger and its own fret) plus twice the position change. Each is
+        tried coming from the note before (`before`: its position and fingers), so that a swap of fingers on a held
+        string shows. None holds: the rule's own (p0, fingers0)."""
+        n_frets = self.guitar.n_frets
+        lo, hi = press[0][0], press[-1][0]
+        m = len(press)
+        orders = [press]
+        if len({k for k, _ in press}) < m:
+            orders.append(sorted(press, key=lambda x: (x[0], -x[1])))
+        cands = []
+        for p in range(max(1, hi - 3), min(lo, n_frets - 3) + 1):
+            for chosen in itertools.combinations(range(4), m):
+                for order in orders:
+                    stretch = sum(abs(k - p - f) for f, (k, _) in zip(chosen, order))
+                    cands.append((stretch + 2 * abs(p - p0), p, {f: (-ms, k) for f, (k, ms) in zip(chosen, order)}))
+        cands.sort(key=lambda c: c[0])
+        for _, p, fingers in cands[:self.search_limit]:
+            if self.holds(p, fingers, goal, before):
+                return p, fingers
+        return p0, fingers0
 
     def configs(self, notes: Notes, plan):
         """Per note: the 27 joint values (wrist and thumb of its position, each finger pressing or hovering over the
@@ -515,24 +600,28 @@ class ScriptedLeft:
                     if f_a[f][0] == f_b[f][0]:
                         slides.append((tb - w / 2, tb + w / 2, f, f_b[f][0], f_a[f][1], f_b[f][1]))
                 continue
+            short = min(notes.onset[i + 1] - notes.onset[i], notes.onset[i] - notes.onset[i - 1])
+            lift, land = self.lift_frames, self.land_frames
+            if self.version >= 3:
+                lift, land = (min(x, max(self.quick_frames, short - 2)) for x in (lift, land))
             for f in range(4):
                 dofs = FINGER_DOFS[f]
                 if np.allclose(q[dofs], q_prev[dofs]):
                     continue
                 a, b = f_a.get(f), f_b.get(f)
                 if a is not None and b is not None:                     # move: lift, travel, press
-                    D = self.lift_frames + 1
+                    D = lift + 1
                     t0 = tb - D / 2
                 elif a is not None:                                     # lift
                     s, k = a
-                    D = self.lift_frames
+                    D = lift
                     t0 = tb + 0.5 if _harmless(goal_b, s, k) else tb - 0.5 - 0.4 * D
                 elif b is not None:                                     # land
                     s, k = b
-                    D = self.land_frames
+                    D = land
                     t0 = tb - 1.5 - D if _harmless(goal_a, s, k) else tb + 1.0 - 0.6 * D
                 else:                                                   # hover somewhere else
-                    D = self.land_frames
+                    D = land
                     t0 = tb - D
                 events[f + 1].append((t0, t0 + D, q[dofs], vias[f]))
         out = np.empty((T + 1, 27))
@@ -578,6 +667,16 @@ class ScriptedLeft:
             J = k.site_jac(tip)[:, dofs]
             x = np.clip(x + np.linalg.solve(J.T @ J + 1e-6 * np.eye(4), J.T @ e), k.lo[dofs], k.hi[dofs])
         return x
+
+
+@functools.cache
+def _press_fn():
+    return jax.jit(lambda segs: detect.pressed_frets(segs, GUITAR))
+
+
+def _pressed(segments) -> np.ndarray:
+    """(6,) frets pressed by finger segments (12, 2, 3), as the env detects them."""
+    return np.asarray(_press_fn()(jnp.asarray(segments, jnp.float32)))
 
 
 def _harmless(goal, s: int, k: int) -> bool:

@@ -1,0 +1,11 @@
+"""The general left hand as a residual on the IK planner (issue 11): the recipe of left_residual.py on the balanced
+procedural material (`dexguitar train --hand left --style general --procedural N`), none of the authors' songs.
+
+The planner has seen no song, so a residual on it starts general; PPO learns corrections that hold across chords,
+lines and jumps anywhere on the neck. No fret shift or tempo change: the material already spans the neck and tempi,
+and the planned feedforward belongs to the notes as written."""
+import os
+import runpy
+
+_residual = runpy.run_path(os.path.join(os.path.dirname(__file__), "left_residual.py"))
+CONFIG, ENV = _residual["CONFIG"], _residual["ENV"]
