@@ -99,5 +99,36 @@ def test_version_3_is_quicker_between_short_notes_only(timeline):
     fast = Notes(notes.left, notes.pick, np.concatenate([[0], 10 + 5 * np.arange(1, notes.n + 1)]))
     v2, v3 = ScriptedLeft(2).desired(fast), ScriptedLeft(3).desired(fast)
     assert not np.allclose(v2, v3)
-    with pytest.raises(ValueError, match="no left planner version 4"):
-        ScriptedLeft(4)
+    from dexguitar.motion.planner import LATEST
+    with pytest.raises(ValueError, match=f"no left planner version {LATEST + 1}"):
+        ScriptedLeft(LATEST + 1)
+
+
+def test_version_4_presses_each_note_by_its_onset(timeline):
+    """Planner version 4 leads every change by 2 frames on 15-frame notes (the slack of the note before beyond its
+    2/3 and 2 more), so a right hand that picks at the onset finds the string pressed; version 3 pressed 2 frames
+    into the note, and a pick there was "picked before the press" (the duet gap, official_songs.md). Judged on the
+    tracked MuJoCo C motion: the first frame, counted from each note's onset, at which its frets are all pressed."""
+    from dexguitar.motion.planner import Tracker, _pressed
+    notes = Notes(np.asarray(timeline.left), np.asarray(timeline.pick), np.asarray(timeline.onset))
+    tracker = Tracker("left")
+
+    def first_pressed(version):
+        hand = ScriptedLeft(version)
+        _, q = tracker.track(hand.desired(notes))
+        out = []
+        for i in range(1, notes.n):
+            goal = notes.left[i]
+            if (goal > 0).any():
+                frames = range(notes.onset[i] - 6, notes.onset[i + 1])
+                out.append(next(j - notes.onset[i] for j in frames if _holds_at(hand, q[j], goal)))
+        return np.array(out)
+
+    def _holds_at(hand, row, goal):
+        hand.kin.set(row)
+        press = _pressed(hand.kin.segments())
+        return all(press[s] == goal[s] for s in range(6) if goal[s] > 0)
+
+    v3, v4 = first_pressed(3), first_pressed(4)
+    assert np.all(v4 <= 0) and np.any(v3 > 0)
+    np.testing.assert_array_equal(v4, v3 - 2)

@@ -324,8 +324,9 @@ POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fi
 
 # Versions of the left hand's plans (a residual policy keeps the one it was trained on: `EnvConfig.feedforward`):
 # 1 the one-finger-per-fret rule; 2 and a searched fingering where the rule's would not hold a note
-# (`ScriptedLeft.search_fingering`); 3 and quicker lifts and landings between notes shorter than 7 frames.
-LATEST = 3
+# (`ScriptedLeft.search_fingering`); 3 and quicker lifts and landings between notes shorter than 7 frames; 4 and
+# every change between two notes earlier by up to `lead_frames`, so that a pick at the onset finds the note pressed.
+LATEST = 4
 
 
 class ScriptedLeft:
@@ -343,6 +344,7 @@ class ScriptedLeft:
     clearance = 0.0075      # pressing finger's parts from the other strings (soft)
     lift_frames = 5
     land_frames = 5
+    lead_frames = 2         # version 4: changes lead the onset by up to this, leaving 2/3 of the note before + 2
     quick_frames = 3        # version 3: a lift or landing beside a note of n < 7 frames takes max(n - 2, this)
     shift_frames = 10       # hand position change (the wrist slides are slow: kp 10 on 0.2 kg)
     start_frames = 10       # from the home pose to the first note's position
@@ -585,6 +587,9 @@ class ScriptedLeft:
         for i in range(notes.n):
             q, vias = cfg[i]
             tb = notes.onset[i] + 0.5
+            if self.version >= 4 and i > 0:      # move before the onset, into the slack of the note before
+                dur = notes.onset[i] - notes.onset[i - 1]
+                tb -= min(self.lead_frames, max(0, dur - (2 * dur + 2) // 3 - 2))
             if i == 0:
                 for gi, dofs in enumerate(groups):
                     events[gi].append((0.0, float(self.start_frames), q[dofs], None))
