@@ -288,9 +288,18 @@ def _general_pair(command: str) -> tuple[str, str]:
     return str(GENERAL["left"]), str(GENERAL["right"])
 
 
+def gsync_for(song: str) -> Path | None:
+    """The shipped GSync synchronizer of a song (`models/policies/gsync_<file stem or name>`: the general pair
+    synchronized on it), if there is one."""
+    ckpt = POLICIES / f"gsync_{Path(song).stem}"
+    return ckpt if (ckpt / "policy.json").exists() else None
+
+
 def _play(args) -> int:
-    if not (args.ckpt or args.left or args.right):          # any tab, played by the general pair
-        args.left, args.right = _general_pair("play")
+    if not (args.ckpt or args.left or args.right):          # any tab: the general pair, synchronized where shipped
+        args.ckpt = gsync_for(args.song)
+        if args.ckpt is None:
+            args.left, args.right = _general_pair("play")
     if bool(args.ckpt) == bool(args.left or args.right) or (not args.ckpt and not (args.left and args.right)):
         raise UserError("play: give either --ckpt SYNC or both --left and --right")
     if args.ckpt:
@@ -460,7 +469,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("play", help="both hands play a song: MP4 with sound (or a PNG strip), WAV and a per-note "
                                     "report")
     p.add_argument("--ckpt", help="a synchronizer (`dexguitar sync` run or its policy/): both hands, synchronized "
-                                  "(none of --ckpt/--left/--right: the general pair)")
+                                  "(none of --ckpt/--left/--right: models/policies/gsync_<song> if shipped, else "
+                                  "the general pair unsynchronized)")
     p.add_argument("--left", help="left-hand policy (exported policy or run directory), without a synchronizer")
     p.add_argument("--right", help="right-hand policy")
     p.add_argument("--unsynchronized", action="store_true", help="with --ckpt: its frozen policies alone")

@@ -246,3 +246,14 @@ def test_sync_and_play_without_policies_take_the_general_pair(tmp_path, monkeypa
         assert main(argv) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and "no general left hand" in err[0] and "--left and --right" in err[0], err
+
+
+def test_play_takes_the_songs_gsync_synchronizer_where_one_is_shipped(tmp_path, monkeypatch):
+    from dexguitar import cli
+    monkeypatch.setattr(cli, "POLICIES", tmp_path)
+    assert cli.gsync_for("../notes/wipe_out.json") is None
+    (tmp_path / "gsync_wipe_out").mkdir()
+    (tmp_path / "gsync_wipe_out" / "policy.json").write_text("{}")
+    assert cli.gsync_for("../notes/wipe_out.json") == tmp_path / "gsync_wipe_out"
+    assert cli.gsync_for("wipe_out") == tmp_path / "gsync_wipe_out"          # an embedded song's name
+    assert cli.gsync_for("snow.gp5") is None
