@@ -9,7 +9,8 @@ SONG ?= ode_to_joy
 CONFIG_LEFT ?= experiments/left_gpu.py
 CONFIG_RIGHT ?= experiments/right_gpu.py
 CONFIG_SYNC ?= experiments/sync_songs.py
-LEFT ?= models/policies/left_general     # make sync: the general pair (GSync) unless LEFT=/RIGHT= name others
+# make sync: the general pair (GSync) unless LEFT=/RIGHT= name others
+LEFT ?= models/policies/left_general
 RIGHT ?= models/policies/right_mixed
 OUT ?= runs
 JOBS ?= 2                      # test processes (compilation is single-threaded: one per core)

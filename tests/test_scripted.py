@@ -65,24 +65,29 @@ def test_pick_strokes_alternate_on_one_string(timeline):
     assert strokes[4] == -strokes[5] == strokes[6]
 
 
+def tracked_presses(hand, notes) -> np.ndarray:
+    """(T + 1, 6) frets pressed, as the env detects them, along `hand`'s plan of `notes` tracked in MuJoCo C (row j:
+    the state after control step j - 1)."""
+    from dexguitar.motion.planner import Tracker, _pressed
+    _, q = Tracker("left").track(hand.desired(notes))
+    out = []
+    for row in q:
+        hand.kin.set(row)
+        out.append(_pressed(hand.kin.segments()))
+    return np.array(out)
+
+
 def test_a_chord_the_rule_cannot_hold_gets_a_searched_fingering():
     """Strings 3 and 4 at fret 2 right after a note at fret 1 (come_as_you_are, note 51): the one-finger-per-fret
     rule keeps position 1 and sends the ring finger back from its own fret 3, where the middle finger is in its way;
     the searched fingering plays the chord. Judged on the whole tracked motion in MuJoCo C (not the search's own
     short trial): the chord's strings pressed at fret 2, string 5 open, for 2/3 of the note."""
-    from dexguitar.motion.planner import Tracker, _pressed
     goal = np.array([[0, 0, 0, 0, 1, 0], [0, 0, 2, 2, -1, 0]])     # timeline goals: k press, -1 open, 0 free
     notes = Notes(goal, goal != 0, np.array([0, 30, 60]))
-    tracker = Tracker("left")
 
     def held(hand):
-        _, q = tracker.track(hand.desired(notes))
-        ok = []
-        for row in q[31:61]:                                        # the states during the chord's 30 frames
-            hand.kin.set(row)
-            press = _pressed(hand.kin.segments())
-            ok.append(press[2] == 2 and press[3] == 2 and press[4] == 0)
-        return np.mean(ok)
+        press = tracked_presses(hand, notes)[31:61]                 # the states during the chord's 30 frames
+        return np.mean((press[:, 2] == 2) & (press[:, 3] == 2) & (press[:, 4] == 0))
 
     rule, searched = ScriptedLeft(version=1), ScriptedLeft()
     assert rule.fingering(notes)[1] == (1, {1: (3, 2), 2: (2, 2)})
@@ -109,25 +114,18 @@ def test_version_4_presses_each_note_by_its_onset(timeline):
     2/3 and 2 more), so a right hand that picks at the onset finds the string pressed; version 3 pressed 2 frames
     into the note, and a pick there was "picked before the press" (the duet gap, official_songs.md). Judged on the
     tracked MuJoCo C motion: the first frame, counted from each note's onset, at which its frets are all pressed."""
-    from dexguitar.motion.planner import Tracker, _pressed
     notes = Notes(np.asarray(timeline.left), np.asarray(timeline.pick), np.asarray(timeline.onset))
-    tracker = Tracker("left")
 
     def first_pressed(version):
-        hand = ScriptedLeft(version)
-        _, q = tracker.track(hand.desired(notes))
+        press = tracked_presses(ScriptedLeft(version), notes)
         out = []
         for i in range(1, notes.n):
             goal = notes.left[i]
             if (goal > 0).any():
                 frames = range(notes.onset[i] - 6, notes.onset[i + 1])
-                out.append(next(j - notes.onset[i] for j in frames if _holds_at(hand, q[j], goal)))
+                out.append(next(j - notes.onset[i] for j in frames
+                                if np.all((press[j] == goal)[goal > 0])))
         return np.array(out)
-
-    def _holds_at(hand, row, goal):
-        hand.kin.set(row)
-        press = _pressed(hand.kin.segments())
-        return all(press[s] == goal[s] for s in range(6) if goal[s] > 0)
 
     v3, v4 = first_pressed(3), first_pressed(4)
     assert np.all(v4 <= 0) and np.any(v3 > 0)

@@ -10,7 +10,7 @@ state initialization) and end with their last note, so the feedforward always be
 A `Plan` lives in `Timeline.plan` (song-frame indexed: frame 0 is the grace rest before the first note, as in a
 sequential window), so it travels with the songs into every jitted program as an argument. Planning takes seconds per
 song on one CPU core; `attach` plans in parallel processes and keeps each plan in a disk cache keyed by the song's
-notes and timing.
+notes and timing and the planner's version (`planner.LATEST`; a residual policy keeps the version it was trained on).
 """
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ import jax
 import numpy as np
 from flax import struct
 
-from dexguitar.motion.planner import LATEST   # planner versions (`EnvConfig.feedforward`); the disk cache is keyed by it
+from dexguitar.motion.planner import LATEST, Notes, ScriptedLeft, Tracker   # LATEST: `EnvConfig.feedforward`
 from dexguitar.world import hands as H
 from dexguitar.world import scene
 
@@ -60,7 +60,6 @@ _PLANNERS: dict = {}
 def plan_notes(job) -> tuple[np.ndarray, np.ndarray]:
     """(action (T, 27), qpos (T + 1, 27)) of the left planner of a version for one `Notes` (left, pick, onset,
     version), from the home pose. Runs in a worker process, which keeps its planner and IK caches between songs."""
-    from dexguitar.motion.planner import Notes, ScriptedLeft, Tracker
     left, pick, onset, version = job
     if version not in _PLANNERS:
         _PLANNERS[version] = (ScriptedLeft(version), Tracker("left"))
@@ -104,7 +103,6 @@ def plan_all(jobs, workers: int = 0, log=print) -> list[tuple[np.ndarray, np.nda
 def song_notes(songs, i: int, rest_frames: int):
     """The planner's `Notes` of song i of a batch played whole: the grace rest, then every note at its written
     tempo (the rows and frames of a sequential window)."""
-    from dexguitar.motion.planner import Notes
     n = int(songs.n_notes[i])
     onset = np.asarray(songs.onset[i][:n + 1], np.int64) + rest_frames
     left = np.concatenate([np.zeros((1, 6), np.int32), np.asarray(songs.left[i][:n], np.int32)])

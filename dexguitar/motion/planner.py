@@ -491,11 +491,15 @@ class ScriptedLeft:
         for f in range(4):
             if f in fingers:
                 s, k = fingers[f]
-                q[FINGER_DOFS[f]] = self.finger(f, p, _key(self.press_point(s, k, f)), True, s)
+                q[FINGER_DOFS[f]] = self.pressing(f, p, s, k)
             else:
                 k = min(p + f, g.n_frets)
                 q[FINGER_DOFS[f]] = self.finger(f, p, _key(self.hover_point(self.mid_x(k), k)), False)
         return q
+
+    def pressing(self, f: int, p: int, s: int, k: int) -> np.ndarray:
+        """4 joint values of finger f in position p pressing string s (0-based) at fret k."""
+        return self.finger(f, p, _key(self.press_point(s, k, f)), True, s)
 
     def holds(self, p: int, fingers: dict, goal, before=None) -> bool:
         """Does this fingering press exactly what `goal` asks (the env's press detection), both as a static pose
@@ -506,7 +510,7 @@ class ScriptedLeft:
         key = (p, tuple(sorted(fingers.items())), tuple(int(x) for x in goal), before[0],
                tuple(sorted(before[1].items())))
         if key not in self._holds:
-            ok = lambda press: bool(np.all(np.where(goal > 0, press == goal, np.where(goal < 0, press == 0, True))))
+            ok = lambda press: bool(np.all(scoring.left_ok(press, goal)))
             q = self.pose(p, fingers)
             self.kin.set(q)
             good = ok(_pressed(self.kin.segments()))
@@ -557,7 +561,7 @@ class ScriptedLeft:
             for f in range(4):
                 if f in fingers:
                     s, k = fingers[f]
-                    q[FINGER_DOFS[f]] = self.finger(f, p, _key(self.press_point(s, k, f)), True, s)
+                    q[FINGER_DOFS[f]] = self.pressing(f, p, s, k)
                     if i > 0 and f in plan[i - 1][1] and plan[i - 1][1][f] != (s, k) and plan[i - 1][0] == p:
                         via = self.hover_point(float(g.target_points[s, k, 0]), k)
                         via[2] = g.string_z + 0.007
@@ -575,9 +579,10 @@ class ScriptedLeft:
 
     def desired(self, notes: Notes) -> np.ndarray:
         """(T + 1, 27) joint targets. Row j is the pose after control step j - 1; note i owns rows onset_i + 1 ..
-        onset_{i+1}. Each change is timed against the note boundary tb = onset_i + 0.5: a press that cannot spoil
-        the previous note lands early, one that can lands right after tb; a lift that cannot spoil the next note
-        waits, one that can is released before tb; hand position changes are centred on tb."""
+        onset_{i+1}. Each change is timed against the note boundary tb = onset_i + 0.5 (version 4: up to
+        `lead_frames` earlier): a press that cannot spoil the previous note lands early, one that can lands right
+        after tb; a lift that cannot spoil the next note waits, one that can is released before tb; hand position
+        changes are centred on tb."""
         plan = self.fingering(notes)
         cfg = self.configs(notes, plan)
         T = notes.frames
@@ -587,13 +592,13 @@ class ScriptedLeft:
         for i in range(notes.n):
             q, vias = cfg[i]
             tb = notes.onset[i] + 0.5
-            if self.version >= 4 and i > 0:      # move before the onset, into the slack of the note before
-                dur = notes.onset[i] - notes.onset[i - 1]
-                tb -= min(self.lead_frames, max(0, dur - (2 * dur + 2) // 3 - 2))
             if i == 0:
                 for gi, dofs in enumerate(groups):
                     events[gi].append((0.0, float(self.start_frames), q[dofs], None))
                 continue
+            dur = notes.onset[i] - notes.onset[i - 1]           # the note before
+            if self.version >= 4:                # move before the onset, into the slack of the note before
+                tb -= min(self.lead_frames, max(0, dur - (2 * dur + 2) // 3 - 2))
             q_prev = cfg[i - 1][0]
             (p_a, f_a), (p_b, f_b) = plan[i - 1], plan[i]
             goal_a, goal_b = notes.left[i - 1], notes.left[i]
@@ -605,7 +610,7 @@ class ScriptedLeft:
                     if f_a[f][0] == f_b[f][0]:
                         slides.append((tb - w / 2, tb + w / 2, f, f_b[f][0], f_a[f][1], f_b[f][1]))
                 continue
-            short = min(notes.onset[i + 1] - notes.onset[i], notes.onset[i] - notes.onset[i - 1])
+            short = min(notes.onset[i + 1] - notes.onset[i], dur)
             lift, land = self.lift_frames, self.land_frames
             if self.version >= 3:
                 lift, land = (min(x, max(self.quick_frames, short - 2)) for x in (lift, land))
