@@ -4,7 +4,10 @@ the wrist's 6 DoFs or on the other 21 alone. Mean per-note precision, recall and
 
     XLA_FLAGS="--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1" JAX_PLATFORMS=cpu \\
       .venv/bin/python experiments/planner_noise.py          # 16 windows, about 4 minutes on 2 cores
+    ... experiments/planner_noise.py 0 0.001 0.002 0.005 0.01 0.02   # only these stds, on every DoF
 """
+import sys
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -34,8 +37,11 @@ def main():
     noise = np.random.default_rng(0).normal(size=acts.shape).astype(np.float32)
     wrist = np.r_[np.ones(6), np.zeros(21)].astype(np.float32)
     print("| noise std (half ranges) | on | precision | recall | F1 |\n|---:|---|---:|---:|---:|")
-    for std, part, mask in [(0.0, "-", 1.0), (0.01, "all", 1.0), (0.02, "all", 1.0), (0.05, "all", 1.0),
-                            (0.02, "wrist (6)", wrist), (0.02, "thumb and fingers (21)", 1.0 - wrist)]:
+    rows = [(0.0, "-", 1.0), (0.01, "all", 1.0), (0.02, "all", 1.0), (0.05, "all", 1.0),
+            (0.02, "wrist (6)", wrist), (0.02, "thumb and fingers (21)", 1.0 - wrist)]
+    if len(sys.argv) > 1:
+        rows = [(float(v), "all" if float(v) else "-", 1.0) for v in sys.argv[1:]]
+    for std, part, mask in rows:
         p, r, f = run(acts + std * noise * mask)
         print(f"| {std:g} | {part} | {p:.3f} | {r:.3f} | {f:.3f} |", flush=True)
 

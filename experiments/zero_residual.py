@@ -12,8 +12,11 @@ import numpy as np
 
 from dexguitar.envs import EnvConfig, make
 from dexguitar.learn import policy as PO
+from dexguitar.learn.distill import with_log_std
 from dexguitar.motion import feedforward as FF
 from dexguitar.music import library
+
+LOG_STD = -6.2        # std 0.002 of a half range: free for the planner (results/planner_noise.md), unlike 0.02
 
 
 def main(out: str, version: int = FF.LATEST) -> None:
@@ -21,6 +24,8 @@ def main(out: str, version: int = FF.LATEST) -> None:
     spec = PO.PolicySpec("policy", "left", env.action_size, env.layout, feedforward=version)
     params = PO.template(spec)                                                # every weight zero: mu = 0
     params["obs_norm"]["var"] = np.ones_like(params["obs_norm"]["var"])
+    # A zero log-std head would give std 1: sampled actions, as a synchronizer trains on, would flail.
+    params = with_log_std(params, LOG_STD)
     PO.export(out, params, dict(spec.to_meta(), iteration=0, samples=0))
     print(f"wrote {out}: a zero residual on the planner, version {version}")
 

@@ -90,6 +90,28 @@ def test_a_damaged_latest_checkpoint_falls_back_to_the_previous_one(tmp_path, ca
         C.restore(tmp_path, tree)
 
 
+def test_a_run_initialized_from_an_export_starts_from_its_weights(trainer, tmp_path, monkeypatch):
+    """`--init-from`: the run's first state holds the export's policy and normalizer; the early check that the CLI
+    makes before building anything reads policy.json only, so the weights are read once."""
+    from dexguitar.learn import policy as PO
+    RUN.train(trainer, tmp_path / "src", iterations=1, progress=False, log=lambda m: None)
+    exported, _ = PO.load(tmp_path / "src" / "policy")
+    fresh = jax.device_get(trainer.init().params["policy"])
+    load, loads = PO.load, []
+    monkeypatch.setattr(PO, "load", lambda d: loads.append(d) or load(d))
+    assert RUN.check_init(tmp_path / "src", "left", 0)["hand"] == "left" and loads == []
+    seen, messages = {}, []
+    monkeypatch.setattr(RUN, "_loop", lambda trainer, run, where, state, *rest: seen.update(state=state) or {})
+    RUN.train(trainer, tmp_path / "run", iterations=2, init_from=tmp_path / "src", progress=False,
+              log=messages.append)
+    assert len(loads) == 1 and any("policy initialized from" in m for m in messages)
+    state = jax.device_get(seen["state"])
+    for a, b in zip(jax.tree.leaves(state.params["policy"]), jax.tree.leaves(exported["policy"])):
+        np.testing.assert_array_equal(np.asarray(a, np.float32), np.asarray(b))
+    assert any(not np.array_equal(b, c) for b, c in zip(jax.tree.leaves(exported["policy"]), jax.tree.leaves(fresh)))
+    np.testing.assert_array_equal(state.obs_norm["mean"], exported["obs_norm"]["mean"])
+
+
 def test_a_run_resumes_on_another_machine_from_its_compact_state(trainer, tmp_path, monkeypatch):
     """`resume/` alone (what a device call brings back, without `ckpt/`) continues the run: networks, normalizers,
     key, iteration and the optimizers' scalars as saved; envs, replay buffers and Adam's moments fresh."""

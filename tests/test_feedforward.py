@@ -73,15 +73,18 @@ def test_window_starts_in_its_planned_state_and_reads_one_frame_per_step(plans):
                                           np.asarray(plan.action[0, start + k]))
 
 
-def test_plans_come_from_the_disk_cache_the_second_time(plans, tmp_path, monkeypatch):
+def test_plans_come_from_the_disk_cache_the_second_time(plans, tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("DEXGUITAR_PLANS", str(tmp_path))
     made = []
     first = FF.attach(TL.stack(plans), log=made.append)
     assert len(made) == 1 and len(list(tmp_path.glob("*.npz"))) == 1
     again = FF.attach(TL.stack(plans), log=made.append)
     assert len(made) == 1                               # the second time: read, not planned
-    FF.attach(TL.stack(plans), log=made.append, version=1)
-    assert len(made) == 2 and len(list(tmp_path.glob("*.npz"))) == 2     # another planner: another plan
+    capsys.readouterr()
+    FF.attach(TL.stack(plans), version=1)                                # another planner: another plan
+    out, err = capsys.readouterr()
+    assert len(list(tmp_path.glob("*.npz"))) == 2
+    assert out == "" and err.startswith("planned 1 songs")     # on stderr: `eval --json` prints only JSON
     np.testing.assert_array_equal(np.asarray(first.plan.action), np.asarray(again.plan.action))
     assert first.plan.action.shape[1] >= FF.MIN_FRAMES and int(first.plan.frames[0]) > 0
     assert np.all(np.abs(np.asarray(first.plan.action)) <= 1.0)

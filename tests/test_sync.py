@@ -178,3 +178,29 @@ def test_sync_command_end_to_end(tmp_path, capsys):
 def test_a_second_sync_call_compiles_nothing(sync_trainer, tmp_path, compiles_per_call):
     first, second = compiles_per_call(sync_trainer, tmp_path / "run")
     assert first >= 1 and second == 0
+
+
+def test_shipped_general_left_hand_is_the_planner_with_noise_it_survives():
+    """A synchronizer trains on actions sampled from the frozen hands' Gaussians. The shipped zero residual's mean is
+    the planner (0); its std must stay where the planner keeps its F1 (results/planner_noise.md: 0.002 costs 0.02 of
+    window F1, 0.02 costs 0.36), not the log-std head's zero bias (std 1) nor the residual recipe's 0.02."""
+    from dexguitar.cli import POLICIES
+    params, meta = PO.load(POLICIES / "left_general")
+    spec = PO.PolicySpec.from_meta(meta)
+    obs = jax.random.normal(jax.random.PRNGKey(3), (5, meta["obs_size"]))
+    mu, log_std = PO.distribution(spec, params, obs)
+    assert float(jnp.max(jnp.abs(mu))) == 0.0
+    np.testing.assert_allclose(np.exp(np.asarray(log_std)), np.exp(-6.2), rtol=1e-2)     # 0.00203
+
+
+def test_shipped_gsync_synchronizer_loads_the_shipped_general_pair():
+    """models/policies/gsync_<stem> names its frozen hands relative to itself, so a clone plays it as shipped."""
+    from dexguitar.cli import POLICIES, gsync_for
+    path = gsync_for("../shared/data/official/notes/wipe_out.json")
+    assert path == POLICIES / "gsync_wipe_out"
+    params, meta = PO.load(path)
+    assert meta["kind"] == "synchronizer" and meta["feedforward"] == 4
+    general = {side: PO.load(POLICIES / name)[0] for side, name in (("left", "left_general"), ("right", "right_mixed"))}
+    for side in ("left", "right"):
+        for a, b in zip(jax.tree.leaves(params["frozen"][side]), jax.tree.leaves(general[side])):
+            np.testing.assert_array_equal(a, b)

@@ -191,18 +191,26 @@ def _resolve_source(export: Path, recorded: str) -> Path:
     raise UserError(f"{export}: the policy it synchronizes, {recorded}, is missing")
 
 
+def read_meta(directory) -> dict:
+    """`policy.json` of an exported policy or a run directory's export, checked to describe a policy; no weights
+    read (what a command checks before it builds anything)."""
+    meta_path = export_dir(directory).absolute() / "policy.json"
+    if not meta_path.exists():
+        raise UserError(f"{meta_path.parent}: not an exported policy or a run (no policy.json)")
+    try:
+        meta = json.loads(meta_path.read_text())
+        PolicySpec.from_meta(meta)
+    except (ValueError, KeyError, TypeError) as err:
+        raise UserError(f"{meta_path}: not a policy description ({err})") from None
+    return meta
+
+
 def load(directory):
     """(params, meta) of an exported policy or a run directory's export. A synchronizer's frozen policies are
     loaded into params["frozen"]. Weights come back as float32."""
     directory = export_dir(directory).absolute()
-    meta_path = directory / "policy.json"
-    if not meta_path.exists():
-        raise UserError(f"{directory}: not an exported policy or a run (no policy.json)")
-    try:
-        meta = json.loads(meta_path.read_text())
-        spec = PolicySpec.from_meta(meta)
-    except (ValueError, KeyError, TypeError) as err:
-        raise UserError(f"{meta_path}: not a policy description ({err})") from None
+    meta = read_meta(directory)
+    spec = PolicySpec.from_meta(meta)
     params = C.restore(directory / "params", template(spec))[0]
     params = jax.tree.map(lambda x: jnp.asarray(x, jnp.float32), params)
     if spec.kind == "synchronizer":

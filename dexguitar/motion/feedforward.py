@@ -18,6 +18,7 @@ import concurrent.futures as futures
 import hashlib
 import multiprocessing
 import os
+import sys
 import time
 import warnings
 from pathlib import Path
@@ -91,8 +92,14 @@ def in_processes(fn, jobs, workers: int = 0) -> tuple[list, int]:
                 os.environ[k] = v
 
 
-def plan_all(jobs, workers: int = 0, log=print) -> list[tuple[np.ndarray, np.ndarray]]:
+def _progress(message: str) -> None:
+    """Planning progress goes to stderr, so that `dexguitar eval --json` prints only JSON on stdout."""
+    print(message, file=sys.stderr, flush=True)
+
+
+def plan_all(jobs, workers: int = 0, log=None) -> list[tuple[np.ndarray, np.ndarray]]:
     """`plan_notes` of every job, in parallel processes."""
+    log = log or _progress
     t0 = time.time()
     out, used = in_processes(plan_notes, jobs, workers)
     log(f"planned {len(jobs)} songs ({sum(len(a) for a, _ in out):,} frames) in {time.time() - t0:.0f} s "
@@ -110,7 +117,7 @@ def song_notes(songs, i: int, rest_frames: int):
     return Notes(left, pick, np.concatenate([[0], onset]))
 
 
-def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, log=print, version: int = LATEST):
+def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, log=None, version: int = LATEST):
     """The song batch (`timeline.batch`/`stack`) with a `Plan` per song by the planner of `version`; empty songs get
     a plan of the home pose. Plans come from the disk cache where they were made before."""
     from dexguitar.music.timeline import capacity
