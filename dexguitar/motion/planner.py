@@ -320,13 +320,17 @@ def _min_jerk_inverse(frac):
 
 WRIST_THUMB = np.arange(11)                                    # wrist slides + hinges, thumb (DoF order)
 FINGER_DOFS = [np.arange(11 + 4 * f, 15 + 4 * f) for f in range(4)]
+HOME_POSITION = 5                                              # the home pose's index finger is over fret 5
 POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fit_home's rest posture (left)
 
 # Versions of the left hand's plans (a residual policy keeps the one it was trained on: `EnvConfig.feedforward`):
 # 1 the one-finger-per-fret rule; 2 and a searched fingering where the rule's would not hold a note
 # (`ScriptedLeft.search_fingering`); 3 and quicker lifts and landings between notes shorter than 7 frames; 4 and
-# every change between two notes earlier by up to `lead_frames`, so that a pick at the onset finds the note pressed.
-LATEST = 4
+# every change between two notes earlier by up to `lead_frames`, so that a pick at the onset finds the note pressed;
+# 5 and where no fingering holds the whole note (more pressed strings than fingers: barre chords), the one that holds
+# the most of it (`ScriptedLeft.search_partial`); its hand positions are solved in a fixed order, so that a song's plan
+# no longer depends on the songs planned before it in the same process (`ScriptedLeft.position`).
+LATEST = 5
 
 
 class ScriptedLeft:
@@ -361,6 +365,7 @@ class ScriptedLeft:
         self._positions: dict[int, np.ndarray] = {}
         self._fingers: dict[tuple, np.ndarray] = {}
         self._holds: dict[tuple, bool] = {}
+        self._held: dict[tuple, int] = {}
         self._tracker = None
 
     # --- geometry helpers
@@ -387,8 +392,15 @@ class ScriptedLeft:
         if p in self._positions:
             return self._positions[p]
         k, hand, g = self.kin, self.kin.hand, self.guitar
-        near = min(self._positions, key=lambda r: abs(r - p), default=None)
-        q0 = k.home if near is None else self._positions[near]
+        if self.version >= 5:
+            # from the neighbour towards the home pose's position, solved first (from the home pose itself at
+            # HOME_POSITION): the same solution whatever was planned before
+            q0 = k.home if p == HOME_POSITION else self.position(p - 1 if p > HOME_POSITION else p + 1)
+        else:
+            # from the nearest position solved so far: a song's plan depends on what this planner planned before it
+            # (the songs before it in a worker process); kept for the policies trained on these versions' plans
+            near = min(self._positions, key=lambda r: abs(r - p), default=None)
+            q0 = k.home if near is None else self._positions[near]
         frets = [min(p + f, g.n_frets) for f in range(4)]
 
         def residual(z):
@@ -475,6 +487,8 @@ class ScriptedLeft:
             before = next(((q, f) for q, f in reversed(out) if q is not None), None)
             if self.version >= 2 and not self.holds(p, fingers, goal, before):
                 p, fingers = self.search_fingering(p, fingers, press, goal, before)
+                if self.version >= 5 and not self.holds(p, fingers, goal, before):
+                    p, fingers = self.search_partial(p, fingers, goal, before)
             out.append((p, fingers))
         first = next((q for q, _ in out if q is not None), 1)
         filled, last = [], first
@@ -525,6 +539,51 @@ class ScriptedLeft:
                 good = ok(_pressed(self.kin.segments()))
             self._holds[key] = good
         return self._holds[key]
+
+    def held(self, p: int, fingers: dict, goal, before=None) -> int:
+        """How many of the strings that `goal` concerns (pressed at a fret or open) end in their state when this
+        fingering is reached from the note before and held in simulation, as `holds` tries it."""
+        before = before or (p, {})
+        key = (p, tuple(sorted(fingers.items())), tuple(int(x) for x in goal), before[0],
+               tuple(sorted(before[1].items())))
+        if key not in self._held:
+            if self._tracker is None:
+                self._tracker = Tracker("left")
+            q, q0 = self.pose(p, fingers), self.pose(*before)
+            move = self.land_frames if before[0] == p else self.shift_frames
+            s = min_jerk(np.arange(move + self.check_frames + 1) / move)[:, None]
+            _, qs = self._tracker.track(q0 + s * (q - q0), start=True)
+            self.kin.set(qs[-1])
+            ok = np.asarray(scoring.left_ok(_pressed(self.kin.segments()), goal))
+            self._held[key] = int(np.sum(ok & (np.asarray(goal) != 0)))
+        return self._held[key]
+
+    def search_partial(self, p0: int, fingers0: dict, goal, before: tuple | None):
+        """Where no fingering holds the whole note (version 5; `search_fingering` found none): of the cheapest
+        `search_limit` fingerings of any min(4, n) of its n pressed strings (costs as in `search_fingering`), the one
+        that holds the most strings of the note (`held`), the rule's own (p0, fingers0) among them. A six-string
+        barre played as four of its strings scores F1 0.8 (precision 1, recall 4/6), where a fingering that slips
+        scores nothing."""
+        n_frets = self.guitar.n_frets
+        pressed = [(int(goal[s]), -s) for s in range(N_STRINGS) if goal[s] > 0]
+        m = min(4, len(pressed))
+        cands = []
+        for subset in itertools.combinations(pressed, m):
+            press = sorted(subset)
+            lo, hi = press[0][0], press[-1][0]
+            orders = [press] if len({k for k, _ in press}) == m else [press, sorted(press, key=lambda x: (x[0], -x[1]))]
+            for p in range(max(1, hi - 3), min(lo, n_frets - 3) + 1):
+                for chosen in itertools.combinations(range(4), m):
+                    for order in orders:
+                        stretch = sum(abs(k - p - f) for f, (k, _) in zip(chosen, order))
+                        cands.append((stretch + 2 * abs(p - p0), p, {f: (-ms, k) for f, (k, ms) in zip(chosen, order)}))
+        cands.sort(key=lambda c: c[0])
+        best, best_n = (p0, fingers0), self.held(p0, fingers0, goal, before)
+        for _, p, fingers in cands[:self.search_limit]:
+            n = self.held(p, fingers, goal, before)
+            if n > best_n:
+                best, best_n = (p, fingers), n
+        return best
 
     def search_fingering(self, p0: int, fingers0: dict, press: list, goal, before: tuple | None):
         """The cheapest fingering that holds the note (`holds`), where the one-finger-per-fret rule's does not: hand
