@@ -364,8 +364,7 @@ class ScriptedLeft:
         self.posture = POSTURE
         self._positions: dict[int, np.ndarray] = {}
         self._fingers: dict[tuple, np.ndarray] = {}
-        self._holds: dict[tuple, bool] = {}
-        self._held: dict[tuple, int] = {}
+        self._trials: dict[tuple, np.ndarray] = {}
         self._tracker = None
 
     # --- geometry helpers
@@ -520,33 +519,22 @@ class ScriptedLeft:
         and in simulation, reached from the pose of the note before (`before`: (position, fingers); None: this
         position's hover pose) and held? Fingers collide with each other and with the strings, which the pose
         alone does not show."""
-        before = before or (p, {})
-        key = (p, tuple(sorted(fingers.items())), tuple(int(x) for x in goal), before[0],
-               tuple(sorted(before[1].items())))
-        if key not in self._holds:
-            ok = lambda press: bool(np.all(scoring.left_ok(press, goal)))
-            q = self.pose(p, fingers)
-            self.kin.set(q)
-            good = ok(_pressed(self.kin.segments()))
-            if good:
-                if self._tracker is None:
-                    self._tracker = Tracker("left")
-                q0 = self.pose(*before)
-                move = self.land_frames if before[0] == p else self.shift_frames
-                s = min_jerk(np.arange(move + self.check_frames + 1) / move)[:, None]
-                _, qs = self._tracker.track(q0 + s * (q - q0), start=True)
-                self.kin.set(qs[-1])
-                good = ok(_pressed(self.kin.segments()))
-            self._holds[key] = good
-        return self._holds[key]
+        self.kin.set(self.pose(p, fingers))
+        return bool(np.all(scoring.left_ok(_pressed(self.kin.segments()), goal))
+                    and np.all(scoring.left_ok(self.trial(p, fingers, before), goal)))
 
     def held(self, p: int, fingers: dict, goal, before=None) -> int:
-        """How many of the strings that `goal` concerns (pressed at a fret or open) end in their state when this
-        fingering is reached from the note before and held in simulation, as `holds` tries it."""
+        """How many of the strings that `goal` concerns (pressed at a fret or open) end in their state in `trial`."""
+        ok = np.asarray(scoring.left_ok(self.trial(p, fingers, before), goal))
+        return int(np.sum(ok & (np.asarray(goal) != 0)))
+
+    def trial(self, p: int, fingers: dict, before=None) -> np.ndarray:
+        """(6,) frets pressed (the env's detection) after this fingering is reached in simulation (MuJoCo C) from
+        the pose of the note before (`before`: (position, fingers); None: this position's hover pose) and held for
+        `check_frames`."""
         before = before or (p, {})
-        key = (p, tuple(sorted(fingers.items())), tuple(int(x) for x in goal), before[0],
-               tuple(sorted(before[1].items())))
-        if key not in self._held:
+        key = (p, tuple(sorted(fingers.items())), before[0], tuple(sorted(before[1].items())))
+        if key not in self._trials:
             if self._tracker is None:
                 self._tracker = Tracker("left")
             q, q0 = self.pose(p, fingers), self.pose(*before)
@@ -554,9 +542,8 @@ class ScriptedLeft:
             s = min_jerk(np.arange(move + self.check_frames + 1) / move)[:, None]
             _, qs = self._tracker.track(q0 + s * (q - q0), start=True)
             self.kin.set(qs[-1])
-            ok = np.asarray(scoring.left_ok(_pressed(self.kin.segments()), goal))
-            self._held[key] = int(np.sum(ok & (np.asarray(goal) != 0)))
-        return self._held[key]
+            self._trials[key] = _pressed(self.kin.segments())
+        return self._trials[key]
 
     def search_partial(self, p0: int, fingers0: dict, goal, before: tuple | None):
         """Where no fingering holds the whole note (version 5; `search_fingering` found none): of the cheapest
