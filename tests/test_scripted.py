@@ -149,7 +149,8 @@ def test_a_plan_does_not_depend_on_what_was_planned_before():
     """From version 5 the hand positions' IK starts from a fixed chain (from the home position outwards), not from
     whichever position was solved last, so that a song's plan is the same alone and after another song in the same
     worker (version 4 differed by up to 0.06 rad here)."""
-    low = Notes(np.array([[0, 0, 2, 0, 0, 0], [0, 0, 0, 3, 0, 0]]), np.eye(6, dtype=bool)[[2, 3]], np.array([0, 20, 40]))
+    low = Notes(np.array([[0, 0, 2, 0, 0, 0], [0, 0, 0, 3, 0, 0]]), np.eye(6, dtype=bool)[[2, 3]],
+                np.array([0, 20, 40]))
     high = Notes(np.array([[0, 0, 12, 0, 0, 0]]), np.eye(6, dtype=bool)[[2]], np.array([0, 20]))
     alone = ScriptedLeft().desired(low)
     after = ScriptedLeft()

@@ -547,23 +547,12 @@ class ScriptedLeft:
 
     def search_partial(self, p0: int, fingers0: dict, goal, before: tuple | None):
         """Where no fingering holds the whole note (version 5; `search_fingering` found none): of the cheapest
-        `search_limit` fingerings of any min(4, n) of its n pressed strings (costs as in `search_fingering`), the one
-        that holds the most strings of the note (`held`), the rule's own (p0, fingers0) among them. A six-string
-        barre played as four of its strings scores F1 0.8 (precision 1, recall 4/6), where a fingering that slips
-        scores nothing."""
-        n_frets = self.guitar.n_frets
+        `search_limit` fingerings of any min(4, n) of its n pressed strings (`fingerings`), the one that holds the
+        most strings of the note (`held`), the rule's own (p0, fingers0) among them. A six-string barre played as
+        four of its strings scores F1 0.8 (precision 1, recall 4/6), where a fingering that slips scores nothing."""
         pressed = [(int(goal[s]), -s) for s in range(N_STRINGS) if goal[s] > 0]
-        m = min(4, len(pressed))
-        cands = []
-        for subset in itertools.combinations(pressed, m):
-            press = sorted(subset)
-            lo, hi = press[0][0], press[-1][0]
-            orders = [press] if len({k for k, _ in press}) == m else [press, sorted(press, key=lambda x: (x[0], -x[1]))]
-            for p in range(max(1, hi - 3), min(lo, n_frets - 3) + 1):
-                for chosen in itertools.combinations(range(4), m):
-                    for order in orders:
-                        stretch = sum(abs(k - p - f) for f, (k, _) in zip(chosen, order))
-                        cands.append((stretch + 2 * abs(p - p0), p, {f: (-ms, k) for f, (k, ms) in zip(chosen, order)}))
+        cands = [c for subset in itertools.combinations(pressed, min(4, len(pressed)))
+                 for c in self.fingerings(sorted(subset), p0)]
         cands.sort(key=lambda c: c[0])
         best, best_n = (p0, fingers0), self.held(p0, fingers0, goal, before)
         for _, p, fingers in cands[:self.search_limit]:
@@ -572,24 +561,27 @@ class ScriptedLeft:
                 best, best_n = (p, fingers), n
         return best
 
-    def search_fingering(self, p0: int, fingers0: dict, press: list, goal, before: tuple | None):
-        """The cheapest fingering that holds the note (`holds`), where the one-finger-per-fret rule's does not: hand
-        positions p whose 4 frets cover the note, any fingers in fret order, notes at one fret in either string
-        order. Cost: stretch (frets between a finger and its own fret) plus twice the position change. Each is
-        tried coming from the note before (`before`: its position and fingers), so that a swap of fingers on a held
-        string shows. None holds: the rule's own (p0, fingers0)."""
-        n_frets = self.guitar.n_frets
-        lo, hi = press[0][0], press[-1][0]
-        m = len(press)
+    def fingerings(self, press: list, p0: int) -> list:
+        """[(cost, p, {finger: (string, fret)})] for the pressed (fret, -string) of `press` (fret order): hand
+        positions p whose 4 frets cover them, any fingers in fret order, notes at one fret in either string order.
+        Cost: stretch (frets between a finger and its own fret) plus twice the change from position p0."""
+        lo, hi, m = press[0][0], press[-1][0], len(press)
         orders = [press]
         if len({k for k, _ in press}) < m:
             orders.append(sorted(press, key=lambda x: (x[0], -x[1])))
-        cands = []
-        for p in range(max(1, hi - 3), min(lo, n_frets - 3) + 1):
+        out = []
+        for p in range(max(1, hi - 3), min(lo, self.guitar.n_frets - 3) + 1):
             for chosen in itertools.combinations(range(4), m):
                 for order in orders:
                     stretch = sum(abs(k - p - f) for f, (k, _) in zip(chosen, order))
-                    cands.append((stretch + 2 * abs(p - p0), p, {f: (-ms, k) for f, (k, ms) in zip(chosen, order)}))
+                    out.append((stretch + 2 * abs(p - p0), p, {f: (-ms, k) for f, (k, ms) in zip(chosen, order)}))
+        return out
+
+    def search_fingering(self, p0: int, fingers0: dict, press: list, goal, before: tuple | None):
+        """The cheapest fingering (`fingerings`) that holds the note (`holds`), where the one-finger-per-fret rule's
+        does not. Each is tried coming from the note before (`before`: its position and fingers), so that a swap of
+        fingers on a held string shows. None holds: the rule's own (p0, fingers0)."""
+        cands = self.fingerings(press, p0)
         cands.sort(key=lambda c: c[0])
         for _, p, fingers in cands[:self.search_limit]:
             if self.holds(p, fingers, goal, before):
