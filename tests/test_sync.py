@@ -193,13 +193,18 @@ def test_shipped_general_left_hand_is_the_planner_with_noise_it_survives():
     np.testing.assert_allclose(np.exp(np.asarray(log_std)), np.exp(-6.2), rtol=1e-2)     # 0.00203
 
 
-def test_shipped_gsync_synchronizer_loads_the_shipped_general_pair():
-    """models/policies/gsync_<stem> names its frozen hands relative to itself, so a clone plays it as shipped."""
+@pytest.mark.parametrize("song, version", [("wipe_out", 4), ("canon_in_d_major1", 5), ("canon_in_d_major2", 5),
+                                           ("super_mario", 5)])
+def test_shipped_gsync_synchronizer_loads_the_shipped_general_pair(song, version):
+    """models/policies/gsync_<stem> names its frozen hands relative to itself, so a clone plays it as shipped, with
+    the planner version it was trained on."""
     from dexguitar.cli import POLICIES, gsync_for
-    path = gsync_for("../shared/data/official/notes/wipe_out.json")
-    assert path == POLICIES / "gsync_wipe_out"
+    path = gsync_for(f"../shared/data/official/notes/{song}.json")
+    assert path == POLICIES / f"gsync_{song}"
     params, meta = PO.load(path)
-    assert meta["kind"] == "synchronizer" and meta["feedforward"] == 4
+    assert meta["kind"] == "synchronizer" and meta["feedforward"] == version
+    assert {side: meta["sources"][side]["path"] for side in ("left", "right")} == {
+        "left": "../left_general", "right": "../right_mixed"}
     general = {side: PO.load(POLICIES / name)[0] for side, name in (("left", "left_general"), ("right", "right_mixed"))}
     for side in ("left", "right"):
         for a, b in zip(jax.tree.leaves(params["frozen"][side]), jax.tree.leaves(general[side])):
