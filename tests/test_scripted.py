@@ -156,3 +156,25 @@ def test_a_plan_does_not_depend_on_what_was_planned_before():
     after = ScriptedLeft()
     after.desired(high)
     np.testing.assert_array_equal(after.desired(low), alone)
+
+
+def test_version_6_keeps_fingers_from_jumping_between_short_notes():
+    """Fret 3 on strings 2 and 4 in turn, 8-frame notes (capriccio_op59_no16, notes 26-28): the one-finger-per-fret
+    rule gives both to the ring finger, which must lift, cross two strings and land within the boundary, and the
+    note is then pressed for less than 2/3 of it. Version 6 gives string 4 to the middle finger (one fret of stretch)
+    and both notes hold. Judged on the tracked motion in MuJoCo C."""
+    s2, s4 = [0, 3, 0, 0, 0, 0], [0, 0, 0, 3, 0, 0]
+    goal = np.array([[0, 0, 0, 2, 0, 0], s2, s4, s2, s4])
+    onset = np.array([0, 20, 28, 36, 44, 52])
+    notes = Notes(goal, goal != 0, onset)
+
+    def plan_and_held(version):
+        hand = ScriptedLeft(version=version)
+        press = tracked_presses(hand, notes)
+        held = [bool(np.all(3 * np.sum(press[onset[i] + 1:onset[i + 1] + 1] == goal[i], axis=0)[goal[i] > 0]
+                            >= 2 * (onset[i + 1] - onset[i]))) for i in (2, 3)]
+        return [fingers for _, fingers in hand.fingering(notes)], held
+    plan5, held5 = plan_and_held(5)
+    plan6, held6 = plan_and_held(6)
+    assert plan5[1] == {2: (1, 3)} and plan5[2] == {2: (3, 3)} and held5 == [False, False]
+    assert plan6[1] == {2: (1, 3)} and plan6[2] == {1: (3, 3)} and held6 == [True, True]

@@ -329,8 +329,10 @@ POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fi
 # every change between two notes earlier by up to `lead_frames`, so that a pick at the onset finds the note pressed;
 # 5 and where no fingering holds the whole note (more pressed strings than fingers: barre chords), the one that holds
 # the most of it (`ScriptedLeft.search_partial`); its hand positions are solved in a fixed order, so that a song's plan
-# no longer depends on the songs planned before it in the same process (`ScriptedLeft.position`).
-LATEST = 5
+# no longer depends on the songs planned before it in the same process (`ScriptedLeft.position`); 6 and no finger
+# jumps from one string or fret to another between two notes in one position where another fingering holds the note
+# (`ScriptedLeft.search_steady`).
+LATEST = 6
 
 
 class ScriptedLeft:
@@ -484,6 +486,8 @@ class ScriptedLeft:
                 fingers[f] = (-ms, k)
                 f_prev = f
             before = next(((q, f) for q, f in reversed(out) if q is not None), None)
+            if self.version >= 6 and len(press) == 1 and self.hurried(notes, i) and self.jumps(before, p, fingers):
+                p, fingers = self.search_steady(p, fingers, press, goal, before)
             if self.version >= 2 and not self.holds(p, fingers, goal, before):
                 p, fingers = self.search_fingering(p, fingers, press, goal, before)
                 if self.version >= 5 and not self.holds(p, fingers, goal, before):
@@ -576,6 +580,33 @@ class ScriptedLeft:
                     stretch = sum(abs(k - p - f) for f, (k, _) in zip(chosen, order))
                     out.append((stretch + 2 * abs(p - p0), p, {f: (-ms, k) for f, (k, ms) in zip(chosen, order)}))
         return out
+
+    def hurried(self, notes: Notes, i: int) -> bool:
+        """Is the change into note i too quick for a finger to move between strings (version 6)? A move takes
+        `lift_frames` + 1 frames; it fits where the note before and note i can spare the third of each that need not
+        be held. Notes shorter than 7 frames have the quicker moves of version 3."""
+        if i == 0:
+            return False
+        n_a, n_b = (notes.onset[j + 1] - notes.onset[j] for j in (i - 1, i))
+        return n_b >= 7 and (n_a + n_b) / 3 < self.lift_frames + 1
+
+    @staticmethod
+    def jumps(before: tuple | None, p: int, fingers: dict) -> bool:
+        """Does a finger press this note somewhere other than where it pressed the note before, in the same hand
+        position? It must then lift, cross and land between the two notes (`desired`: a move of `lift_frames` + 1),
+        which leaves an 8-frame note less than the 2/3 it must be held."""
+        return (before is not None and before[0] == p
+                and any(f in before[1] and before[1][f][0] != s for f, (s, _) in fingers.items()))
+
+    def search_steady(self, p0: int, fingers0: dict, press: list, goal, before: tuple):
+        """Version 6: where the rule's fingering makes a finger jump (`jumps`), the cheapest fingering in the same
+        position without a jump that holds the note (`holds`); none holds: the rule's own."""
+        cands = sorted((c for c in self.fingerings(press, p0) if c[1] == p0 and not self.jumps(before, p0, c[2])),
+                       key=lambda c: c[0])
+        for _, p, fingers in cands[:self.search_limit]:
+            if self.holds(p, fingers, goal, before):
+                return p, fingers
+        return p0, fingers0
 
     def search_fingering(self, p0: int, fingers0: dict, press: list, goal, before: tuple | None):
         """The cheapest fingering (`fingerings`) that holds the note (`holds`), where the one-finger-per-fret rule's
