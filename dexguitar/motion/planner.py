@@ -10,9 +10,10 @@ How it plays, per hand, before the rollout (`ScriptedPlayer.plan`):
 1. Keyframes in the guitar frame. Left hand: one-finger-per-fret hand positions covering 4 frets; each note's
    target strings get a fingertip on p_{i,k} resting on the fretboard, the other fingers hover 10 mm above the
    strings (version 2 on: where that fingering does not hold a note in a short simulated trial, the cheapest
-   other one that does). Right hand: the pick sweeps from the gap before the first target string to the gap after the last,
-   3 mm below string height, choosing the stroke direction that starts where the last one ended (alternate picking
-   on one string), and hovers 6 mm above the strings in between.
+   other one that does; version 7 on: one finger across two neighbouring strings at one fret). Right hand: the
+   pick sweeps from the gap before the first target string to the gap after the last, 3 mm below string height,
+   choosing the stroke direction that starts where the last one ended (alternate picking on one string), and hovers
+   6 mm above the strings in between.
 2. Joint targets by least squares on MuJoCo C kinematics (`motion.kinematics.HandKinematics`; cached per keyframe,
    warm-started), joined by minimum-jerk interpolation with per-finger timing that anticipates the onset wherever
    an early press cannot spoil the previous note.
@@ -331,8 +332,15 @@ POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fi
 # the most of it (`ScriptedLeft.search_partial`); its hand positions are solved in a fixed order, so that a song's plan
 # no longer depends on the songs planned before it in the same process (`ScriptedLeft.position`); 6 and no finger
 # jumps from one string or fret to another between two notes in one position where another fingering holds the note
-# (`ScriptedLeft.search_steady`).
-LATEST = 6
+# (`ScriptedLeft.search_steady`); 7 and one finger across two neighbouring strings pressed at one fret, where that
+# fingering holds the note (`ScriptedLeft.pair_fingering`).
+LATEST = 7
+PAIR = 10               # a finger pressing strings s and s + 1 (0-based) at one fret: "string" PAIR + s (version 7)
+
+
+def strings_of(s: int) -> tuple:
+    """The strings (0-based) under a finger's "string" s: one, or two for a pair (`PAIR`)."""
+    return (s - PAIR, s - PAIR + 1) if s >= PAIR else (s,)
 
 
 class ScriptedLeft:
@@ -374,8 +382,10 @@ class ScriptedLeft:
         return float((self.guitar.fret_y[k] + self.guitar.fret_y[k - 1]) / 2)
 
     def press_point(self, s: int, k: int, f: int = 0) -> np.ndarray:
-        """Tip target of finger f for string s (0-based) at fret k: on p_{s,k}, its capsule resting on the board."""
-        p = self.guitar.target_points[s, k].copy()
+        """Tip target of finger f for string s (0-based) at fret k: on p_{s,k}, its capsule resting on the board.
+        A pair (`PAIR`): midway between the two strings' points, where the finger's axis is within the press
+        distance of both (3.7-4.3 mm of 6)."""
+        p = np.mean([self.guitar.target_points[j, k] for j in strings_of(s)], axis=0)
         p[2] = self.guitar.fretboard_z + H.RADII[H.FINGERS[f]][2] - self.press_depth
         return p
 
@@ -438,7 +448,7 @@ class ScriptedLeft:
         base = self.position(p).copy()
         dofs = FINGER_DOFS[f]
         tip = hand.tips[f]
-        others = [i for i in range(N_STRINGS) if i != string]
+        others = [i for i in range(N_STRINGS) if i not in strings_of(string)]
         strings = g.strings
 
         def residual(x):
@@ -463,8 +473,8 @@ class ScriptedLeft:
     def fingering(self, notes: Notes):
         """Per note: (hand position, {finger: (string, fret)}). One finger per fret; the position moves only when a
         note leaves it, by the least amount. Chords: fingers by fret (index on the lowest), at one fret the string
-        nearer string 6 first; more than 4 pressed strings keep the 4 lowest frets."""
-        n_frets = self.guitar.n_frets
+        nearer string 6 first; more than 4 pressed strings keep the 4 lowest frets. Later versions search where that
+        does not hold (2, 5), avoid hurried jumps (6) and press neighbouring strings at one fret with one finger (7)."""
         p, out = None, []
         for i in range(notes.n):
             goal = notes.left[i]
@@ -472,20 +482,14 @@ class ScriptedLeft:
             if not press:
                 out.append((p, {}))
                 continue
-            lo, hi = press[0][0], press[-1][0]
-            if p is None:
-                p = max(1, min(lo, hi - 3))
-            elif lo < p:
-                p = lo
-            elif hi > p + 3:
-                p = hi - 3 if hi - lo <= 3 else lo
-            p = min(p, n_frets - 3)
-            fingers, f_prev = {}, -1
-            for j, (k, ms) in enumerate(press):
-                f = max(f_prev + 1, min(k - p, 3 - (len(press) - 1 - j)))
-                fingers[f] = (-ms, k)
-                f_prev = f
             before = next(((q, f) for q, f in reversed(out) if q is not None), None)
+            if self.version >= 7:
+                paired = self.pair_fingering(goal, p, before)
+                if paired is not None:
+                    p = paired[0]
+                    out.append(paired)
+                    continue
+            p, fingers = self.rule(press, p)
             if self.version >= 6 and len(press) == 1 and self.hurried(notes, i) and self.jumps(before, p, fingers):
                 p, fingers = self.search_steady(p, fingers, press, goal, before)
             if self.version >= 2 and not self.holds(p, fingers, goal, before):
@@ -499,6 +503,44 @@ class ScriptedLeft:
             last = q if q is not None else last
             filled.append((last, fingers))
         return filled
+
+    def rule(self, press: list, p: int | None):
+        """The one-finger-per-fret rule for the pressed (fret, -string) of `press` (fret order, at most 4), coming
+        from hand position p (None: the first note): (position, {finger: (string, fret)})."""
+        lo, hi = press[0][0], press[-1][0]
+        if p is None:
+            p = max(1, min(lo, hi - 3))
+        elif lo < p:
+            p = lo
+        elif hi > p + 3:
+            p = hi - 3 if hi - lo <= 3 else lo
+        p = min(p, self.guitar.n_frets - 3)
+        fingers, f_prev = {}, -1
+        for j, (k, ms) in enumerate(press):
+            f = max(f_prev + 1, min(k - p, 3 - (len(press) - 1 - j)))
+            fingers[f] = (-ms, k)
+            f_prev = f
+        return p, fingers
+
+    def pair_fingering(self, goal, p: int | None, before: tuple | None):
+        """Version 7: where two neighbouring strings are pressed at one fret, the rule's fingering with one finger
+        across each such pair (`PAIR`; pairs taken from string 6 up), if it holds the whole note (`holds`); else
+        None. It frees a finger for the rest of a chord (five or six pressed strings with four fingers) and lets a
+        double stop move as one finger."""
+        units, s = [], N_STRINGS - 1
+        while s >= 0:
+            if goal[s] <= 0:
+                s -= 1
+            elif s > 0 and goal[s - 1] == goal[s]:
+                units.append((int(goal[s]), -(PAIR + s - 1)))
+                s -= 2
+            else:
+                units.append((int(goal[s]), -s))
+                s -= 1
+        if len(units) == int(np.sum(goal > 0)) or len(units) > 4:
+            return None
+        q, fingers = self.rule(sorted(units), p)
+        return (q, fingers) if self.holds(q, fingers, goal, before) else None
 
     def pose(self, p: int, fingers: dict) -> np.ndarray:
         """27 joint values of position p with `fingers` ({finger: (string, fret)}) pressing, the others hovering over
@@ -632,7 +674,7 @@ class ScriptedLeft:
                     s, k = fingers[f]
                     q[FINGER_DOFS[f]] = self.pressing(f, p, s, k)
                     if i > 0 and f in plan[i - 1][1] and plan[i - 1][1][f] != (s, k) and plan[i - 1][0] == p:
-                        via = self.hover_point(float(g.target_points[s, k, 0]), k)
+                        via = self.hover_point(float(self.press_point(s, k, f)[0]), k)
                         via[2] = g.string_z + 0.007
                         vias[f] = self.finger(f, p, _key(via), False)
                     continue
@@ -641,7 +683,7 @@ class ScriptedLeft:
                 if nxt is None:
                     target = self.hover_point(self.mid_x(min(p + f, g.n_frets)), min(p + f, g.n_frets))
                 else:
-                    target = self.hover_point(float(g.target_points[nxt[0], nxt[1], 0]), nxt[1])
+                    target = self.hover_point(float(self.press_point(*nxt, f)[0]), nxt[1])
                 q[FINGER_DOFS[f]] = self.finger(f, p, _key(target), False)
             out.append((q, vias))
         return out
@@ -761,8 +803,9 @@ def _pressed(segments) -> np.ndarray:
 def _harmless(goal, s: int, k: int) -> bool:
     """Would a finger at fret k on string s (and, on its way, over string s - 1: fingers come from the string-1 side)
     leave a note with this left goal unchanged? Yes where the string is free (goal 0) or pressed at a fret >= k
-    (the highest fret wins); never on an open string."""
-    return all(goal[j] == 0 or k <= goal[j] for j in (s - 1, s) if 0 <= j < N_STRINGS)
+    (the highest fret wins); never on an open string. A pair (`PAIR`): both its strings."""
+    on = strings_of(s)
+    return all(goal[j] == 0 or k <= goal[j] for j in (on[0] - 1,) + on if 0 <= j < N_STRINGS)
 
 
 def _key(p) -> tuple:
