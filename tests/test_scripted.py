@@ -197,3 +197,23 @@ def test_version_7_presses_a_double_stop_with_one_finger():
     assert [set(f.values()) for _, f in ScriptedLeft(version=7).fingering(notes)[1:3]] == [{(PAIR, 5)}, {(PAIR, 6)}]
     assert held(7) == [2] * 6
     assert sum(held(6)) < 12
+
+
+def test_version_8_plans_hand_positions_for_the_whole_line():
+    """Frets 6, 7, 6, 8, 7 on strings 3 and 2, 5- and 10-frame notes (johnny_b_goodie's opening). The rule moves the
+    hand only when a note leaves its position, by the least amount: positions 3, 4, 5, a slow wrist move at three of
+    the notes, and the third note is lost. Version 8 chooses positions for the whole song with as few moves as
+    cover it: position 5 holds them all, and every note is held on the tracked motion."""
+    goal = np.array([[0] * 6, [0, 0, 6, 0, 0, 0], [0, 0, 7, 0, 0, 0], [0, 6, 0, 0, 0, 0], [0, 8, 0, 0, 0, 0],
+                     [0, 0, 7, 0, 0, 0]])
+    onset = np.array([0, 20, 25, 30, 40, 50, 60])
+    notes = Notes(goal, goal != 0, onset)
+
+    def plan_and_held(version):
+        hand = ScriptedLeft(version=version)
+        press = tracked_presses(hand, notes)
+        held = [bool(np.all(3 * np.sum(press[onset[i] + 1:onset[i + 1] + 1] == goal[i], axis=0)[goal[i] > 0]
+                            >= 2 * (onset[i + 1] - onset[i]))) for i in range(1, len(goal))]
+        return [p for p, _ in hand.fingering(notes)[1:]], held
+    assert plan_and_held(7) == ([3, 4, 4, 5, 5], [True, True, False, True, True])
+    assert plan_and_held(8) == ([5] * 5, [True] * 5)

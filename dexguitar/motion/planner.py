@@ -333,8 +333,9 @@ POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fi
 # no longer depends on the songs planned before it in the same process (`ScriptedLeft.position`); 6 and no finger
 # jumps from one string or fret to another between two notes in one position where another fingering holds the note
 # (`ScriptedLeft.search_steady`); 7 and one finger across two neighbouring strings pressed at one fret, where that
-# fingering holds the note (`ScriptedLeft.pair_fingering`).
-LATEST = 7
+# fingering holds the note (`ScriptedLeft.pair_fingering`); 8 and hand positions chosen for the whole song, with as
+# few and as small moves as cover its notes (`ScriptedLeft.positions`), instead of moving only when a note leaves one.
+LATEST = 8
 PAIR = 10               # a finger pressing strings s and s + 1 (0-based) at one fret: "string" PAIR + s (version 7)
 
 
@@ -476,6 +477,7 @@ class ScriptedLeft:
         nearer string 6 first; more than 4 pressed strings keep the 4 lowest frets. Later versions search where that
         does not hold (2, 5), avoid hurried jumps (6) and press neighbouring strings at one fret with one finger (7)."""
         p, out = None, []
+        planned = self.positions(notes) if self.version >= 8 else [None] * notes.n
         for i in range(notes.n):
             goal = notes.left[i]
             press = sorted(((int(goal[s]), -s) for s in range(N_STRINGS) if goal[s] > 0))[:4]
@@ -484,12 +486,12 @@ class ScriptedLeft:
                 continue
             before = next(((q, f) for q, f in reversed(out) if q is not None), None)
             if self.version >= 7:
-                paired = self.pair_fingering(goal, p, before)
+                paired = self.pair_fingering(goal, p, before, planned[i])
                 if paired is not None:
                     p = paired[0]
                     out.append(paired)
                     continue
-            p, fingers = self.rule(press, p)
+            p, fingers = self.rule(press, p, planned[i])
             if self.version >= 6 and len(press) == 1 and self.hurried(notes, i) and self.jumps(before, p, fingers):
                 p, fingers = self.search_steady(p, fingers, press, goal, before)
             if self.version >= 2 and not self.holds(p, fingers, goal, before):
@@ -504,11 +506,14 @@ class ScriptedLeft:
             filled.append((last, fingers))
         return filled
 
-    def rule(self, press: list, p: int | None):
+    def rule(self, press: list, p: int | None, planned: int | None = None):
         """The one-finger-per-fret rule for the pressed (fret, -string) of `press` (fret order, at most 4), coming
-        from hand position p (None: the first note): (position, {finger: (string, fret)})."""
+        from hand position p (None: the first note), or in position `planned` (version 8): (position, {finger:
+        (string, fret)})."""
         lo, hi = press[0][0], press[-1][0]
-        if p is None:
+        if planned is not None:
+            p = planned
+        elif p is None:
             p = max(1, min(lo, hi - 3))
         elif lo < p:
             p = lo
@@ -522,7 +527,39 @@ class ScriptedLeft:
             f_prev = f
         return p, fingers
 
-    def pair_fingering(self, goal, p: int | None, before: tuple | None):
+    def positions(self, notes: Notes) -> list:
+        """Version 8: the hand position of each note (None: nothing pressed) for the whole song at once, by dynamic
+        programming: each note's position covers its pressed frets (a span of more than 4 frets: its lowest, as
+        the rule), and the song has as few moves as can be (each costs 1 + 0.05 per fret), from the home pose's
+        position; of plans as good, the one that moves latest, as the rule does. The rule moves only when a note leaves the position, by the least amount, so an ascending line
+        moves at every note where one move would cover it."""
+        top = self.guitar.n_frets - 3
+        allowed = []
+        for goal in notes.left:
+            frets = [int(v) for v in goal if v > 0]
+            if not frets:
+                allowed.append(None)
+                continue
+            lo, hi = min(frets), max(frets)
+            allowed.append(list(range(max(1, hi - 3), min(lo, top) + 1)) if hi - lo <= 3 else [min(lo, top)])
+        def move(q, p, i):          # a later move costs a little less: of equal plans, the one that moves late
+            return (q != p) * (1 + 0.05 * abs(q - p) - 1e-4 * i)
+
+        cost, back = {HOME_POSITION: 0.0}, []
+        for i, ps in enumerate(allowed):
+            if ps is None:
+                back.append(None)
+                continue
+            step = {p: min(cost, key=lambda q: (cost[q] + move(q, p, i), abs(q - p))) for p in ps}
+            cost = {p: cost[q] + move(q, p, i) for p, q in step.items()}
+            back.append(step)
+        out, p = [None] * notes.n, min(cost, key=cost.get)
+        for i in reversed(range(notes.n)):
+            if back[i] is not None:
+                out[i], p = p, back[i][p]
+        return out
+
+    def pair_fingering(self, goal, p: int | None, before: tuple | None, planned: int | None = None):
         """Version 7: where two neighbouring strings are pressed at one fret, the rule's fingering with one finger
         across each such pair (`PAIR`; pairs taken from string 6 up), if it holds the whole note (`holds`); else
         None. It frees a finger for the rest of a chord (five or six pressed strings with four fingers) and lets a
@@ -539,7 +576,7 @@ class ScriptedLeft:
                 s -= 1
         if len(units) == int(np.sum(goal > 0)) or len(units) > 4:
             return None
-        q, fingers = self.rule(sorted(units), p)
+        q, fingers = self.rule(sorted(units), p, planned)
         return (q, fingers) if self.holds(q, fingers, goal, before) else None
 
     def pose(self, p: int, fingers: dict) -> np.ndarray:
