@@ -77,6 +77,12 @@ def tracked_presses(hand, notes) -> np.ndarray:
     return np.array(out)
 
 
+def strings_held(press, goal, onset, i: int) -> int:
+    """How many of note i's pressed strings stay at their fret for 2/3 of it in `press` (rows as `tracked_presses`)."""
+    ok = 3 * np.sum(press[onset[i] + 1:onset[i + 1] + 1] == goal[i], axis=0) >= 2 * (onset[i + 1] - onset[i])
+    return int(np.sum(ok[goal[i] > 0]))
+
+
 def test_a_chord_the_rule_cannot_hold_gets_a_searched_fingering():
     """Strings 3 and 4 at fret 2 right after a note at fret 1 (come_as_you_are, note 51): the one-finger-per-fret
     rule keeps position 1 and sends the ring finger back from its own fret 3, where the middle finger is in its way;
@@ -171,13 +177,11 @@ def test_version_6_keeps_fingers_from_jumping_between_short_notes():
     def plan_and_held(version):
         hand = ScriptedLeft(version=version)
         press = tracked_presses(hand, notes)
-        held = [bool(np.all(3 * np.sum(press[onset[i] + 1:onset[i + 1] + 1] == goal[i], axis=0)[goal[i] > 0]
-                            >= 2 * (onset[i + 1] - onset[i]))) for i in (2, 3)]
-        return [fingers for _, fingers in hand.fingering(notes)], held
+        return [fingers for _, fingers in hand.fingering(notes)], [strings_held(press, goal, onset, i) for i in (2, 3)]
     plan5, held5 = plan_and_held(5)
     plan6, held6 = plan_and_held(6)
-    assert plan5[1] == {2: (1, 3)} and plan5[2] == {2: (3, 3)} and held5 == [False, False]
-    assert plan6[1] == {2: (1, 3)} and plan6[2] == {1: (3, 3)} and held6 == [True, True]
+    assert plan5[1] == {2: (1, 3)} and plan5[2] == {2: (3, 3)} and held5 == [0, 0]
+    assert plan6[1] == {2: (1, 3)} and plan6[2] == {1: (3, 3)} and held6 == [1, 1]
 
 
 def test_version_7_presses_a_double_stop_with_one_finger():
@@ -192,8 +196,7 @@ def test_version_7_presses_a_double_stop_with_one_finger():
 
     def held(version):
         press = tracked_presses(ScriptedLeft(version=version), notes)
-        return [int(np.sum(3 * np.sum(press[onset[i] + 1:onset[i + 1] + 1] == goal[i], axis=0)[goal[i] > 0]
-                           >= 2 * (onset[i + 1] - onset[i]))) for i in range(1, len(goal))]
+        return [strings_held(press, goal, onset, i) for i in range(1, len(goal))]
     assert [set(f.values()) for _, f in ScriptedLeft(version=7).fingering(notes)[1:3]] == [{(PAIR, 5)}, {(PAIR, 6)}]
     assert held(7) == [2] * 6
     assert sum(held(6)) < 12
@@ -212,8 +215,6 @@ def test_version_8_plans_hand_positions_for_the_whole_line():
     def plan_and_held(version):
         hand = ScriptedLeft(version=version)
         press = tracked_presses(hand, notes)
-        held = [bool(np.all(3 * np.sum(press[onset[i] + 1:onset[i + 1] + 1] == goal[i], axis=0)[goal[i] > 0]
-                            >= 2 * (onset[i + 1] - onset[i]))) for i in range(1, len(goal))]
-        return [p for p, _ in hand.fingering(notes)[1:]], held
-    assert plan_and_held(7) == ([3, 4, 4, 5, 5], [True, True, False, True, True])
-    assert plan_and_held(8) == ([5] * 5, [True] * 5)
+        return [p for p, _ in hand.fingering(notes)[1:]], [strings_held(press, goal, onset, i) for i in range(1, 6)]
+    assert plan_and_held(7) == ([3, 4, 4, 5, 5], [1, 1, 0, 1, 1])
+    assert plan_and_held(8) == ([5] * 5, [1] * 5)
