@@ -218,3 +218,23 @@ def test_version_8_plans_hand_positions_for_the_whole_line():
         return [p for p, _ in hand.fingering(notes)[1:]], [strings_held(press, goal, onset, i) for i in range(1, 6)]
     assert plan_and_held(7) == ([3, 4, 4, 5, 5], [1, 1, 0, 1, 1])
     assert plan_and_held(8) == ([5] * 5, [1] * 5)
+
+
+def test_version_9_searches_the_fingerings_with_a_pair():
+    """Strings 2, 3 and 4 at fret 2 with string 5 open (come_as_you_are, note 52), in position 1. The rule puts the
+    pair of strings 3 and 4 on the middle finger and string 2 on the ring finger, which does not hold in the trial, so
+    version 8 falls back to three fingers, of which two hold. Version 9 searches the fingerings with the pair,
+    cheapest first: the index across the pair and the middle finger on string 2 hold all three strings on the tracked
+    motion."""
+    from dexguitar.motion.planner import PAIR
+    chord = [0, 2, 2, 2, -1, 0]
+    goal = np.array([[0] * 6, chord, chord])
+    onset = np.array([0, 20, 50, 80])
+    notes = Notes(goal, goal > 0, onset)
+
+    def held(version):
+        hand = ScriptedLeft(version=version)
+        press = tracked_presses(hand, notes)
+        return hand.fingering(notes)[1][1], [strings_held(press, goal, onset, i) for i in (1, 2)]
+    assert held(8) == ({0: (3, 2), 1: (2, 2), 2: (1, 2)}, [2, 2])
+    assert held(9) == ({0: (PAIR + 2, 2), 1: (1, 2)}, [3, 3])

@@ -334,8 +334,9 @@ POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fi
 # jumps from one string or fret to another between two notes in one position where another fingering holds the note
 # (`ScriptedLeft.search_steady`); 7 and one finger across two neighbouring strings pressed at one fret, where that
 # fingering holds the note (`ScriptedLeft.pair_fingering`); 8 and hand positions chosen for the whole song, with as
-# few and as small moves as cover its notes (`ScriptedLeft.positions`), instead of moving only when a note leaves one.
-LATEST = 8
+# few and as small moves as cover its notes (`ScriptedLeft.positions`), instead of moving only when a note leaves one;
+# 9 and, where the rule's fingering with pairs does not hold, the cheapest other fingering with them that does.
+LATEST = 9
 PAIR = 10               # a finger pressing strings s and s + 1 (0-based) at one fret: "string" PAIR + s (version 7)
 
 
@@ -475,7 +476,8 @@ class ScriptedLeft:
         """Per note: (hand position, {finger: (string, fret)}). One finger per fret; the position moves only when a
         note leaves it, by the least amount. Chords: fingers by fret (index on the lowest), at one fret the string
         nearer string 6 first; more than 4 pressed strings keep the 4 lowest frets. Later versions search where that
-        does not hold (2, 5), avoid hurried jumps (6) and press neighbouring strings at one fret with one finger (7)."""
+        does not hold (2, 5), avoid hurried jumps (6), press neighbouring strings at one fret with one finger (7, 9)
+        and plan the positions for the whole song (8)."""
         p, out = None, []
         planned = self.positions(notes) if self.version >= 8 else [None] * notes.n
         for i in range(notes.n):
@@ -531,8 +533,9 @@ class ScriptedLeft:
         """Version 8: the hand position of each note (None: nothing pressed) for the whole song at once, by dynamic
         programming: each note's position covers its pressed frets (a span of more than 4 frets: its lowest, as
         the rule), and the song has as few moves as can be (each costs 1 + 0.05 per fret), from the home pose's
-        position; of plans as good, the one that moves latest, as the rule does. The rule moves only when a note leaves the position, by the least amount, so an ascending line
-        moves at every note where one move would cover it."""
+        position; of plans as good, the one that moves latest, as the rule does. The rule moves only when a note
+        leaves the position, by the least amount, so an ascending line moves at every note where one move would
+        cover it."""
         top = self.guitar.n_frets - 3
         allowed = []
         for goal in notes.left:
@@ -577,7 +580,13 @@ class ScriptedLeft:
         if len(units) == int(np.sum(goal > 0)) or len(units) > 4:
             return None
         q, fingers = self.rule(sorted(units), p, planned)
-        return (q, fingers) if self.holds(q, fingers, goal, before) else None
+        if self.holds(q, fingers, goal, before):
+            return q, fingers
+        if self.version >= 9:              # the rule's order of fingers at one fret can cross them: search
+            for _, q, fingers in sorted(self.fingerings(sorted(units), q), key=lambda c: c[0])[:self.search_limit]:
+                if self.holds(q, fingers, goal, before):
+                    return q, fingers
+        return None
 
     def pose(self, p: int, fingers: dict) -> np.ndarray:
         """27 joint values of position p with `fingers` ({finger: (string, fret)}) pressing, the others hovering over
