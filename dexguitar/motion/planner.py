@@ -545,6 +545,7 @@ class ScriptedLeft:
                 continue
             lo, hi = min(frets), max(frets)
             allowed.append(list(range(max(1, hi - 3), min(lo, top) + 1)) if hi - lo <= 3 else [min(lo, top)])
+
         def move(q, p, i):          # a later move costs a little less: of equal plans, the one that moves late
             return (q != p) * (1 + 0.05 * abs(q - p) - 1e-4 * i)
 
