@@ -584,9 +584,7 @@ class ScriptedLeft:
         if self.holds(q, fingers, goal, before):
             return q, fingers
         if self.version >= 9:              # the rule's order of fingers at one fret can cross them: search
-            for _, q, fingers in sorted(self.fingerings(sorted(units), q), key=lambda c: c[0])[:self.search_limit]:
-                if self.holds(q, fingers, goal, before):
-                    return q, fingers
+            return self.first_holding(self.fingerings(sorted(units), q), goal, before)
         return None
 
     def pose(self, p: int, fingers: dict) -> np.ndarray:
@@ -690,23 +688,22 @@ class ScriptedLeft:
     def search_steady(self, p0: int, fingers0: dict, press: list, goal, before: tuple):
         """Version 6: where the rule's fingering makes a finger jump (`jumps`), the cheapest fingering in the same
         position without a jump that holds the note (`holds`); none holds: the rule's own."""
-        cands = sorted((c for c in self.fingerings(press, p0) if c[1] == p0 and not self.jumps(before, p0, c[2])),
-                       key=lambda c: c[0])
-        for _, p, fingers in cands[:self.search_limit]:
-            if self.holds(p, fingers, goal, before):
-                return p, fingers
-        return p0, fingers0
+        steady = [c for c in self.fingerings(press, p0) if c[1] == p0 and not self.jumps(before, p0, c[2])]
+        return self.first_holding(steady, goal, before) or (p0, fingers0)
 
     def search_fingering(self, p0: int, fingers0: dict, press: list, goal, before: tuple | None):
         """The cheapest fingering (`fingerings`) that holds the note (`holds`), where the one-finger-per-fret rule's
         does not. Each is tried coming from the note before (`before`: its position and fingers), so that a swap of
         fingers on a held string shows. None holds: the rule's own (p0, fingers0)."""
-        cands = self.fingerings(press, p0)
-        cands.sort(key=lambda c: c[0])
-        for _, p, fingers in cands[:self.search_limit]:
+        return self.first_holding(self.fingerings(press, p0), goal, before) or (p0, fingers0)
+
+    def first_holding(self, cands: list, goal, before: tuple | None):
+        """(p, fingers) of the cheapest of `cands` ((cost, p, fingers); the `search_limit` cheapest tried, in a
+        stable order) that holds the note (`holds`), or None."""
+        for _, p, fingers in sorted(cands, key=lambda c: c[0])[:self.search_limit]:
             if self.holds(p, fingers, goal, before):
                 return p, fingers
-        return p0, fingers0
+        return None
 
     def configs(self, notes: Notes, plan):
         """Per note: the 27 joint values (wrist and thumb of its position, each finger pressing or hovering over the
