@@ -170,11 +170,13 @@ def test_training_iterations_and_exact_resume(trainer, tmp_path, compiled_chunk)
     assert all(jax.tree.leaves(same)) and int(resumed.iteration) == 2
 
 
-def test_kl_target_adapts_the_actor_rate_inside_the_update(trainer):
+def kl_update(trainer, iteration=0, **config):
+    """(config, parameters before, after, optimizer state after, log) of one jitted PPO update of a KL-target
+    trainer (rate 1e-3) on a random batch whose log-probabilities are the acting policy's (so its first KL is 0)."""
     from types import SimpleNamespace
     from dexguitar.learn.policy import distribution
     from dexguitar.learn.trainer import Trainer
-    cfg = dataclasses.replace(trainer.config, kl_target=1e-9, actor_lr=1e-3)
+    cfg = dataclasses.replace(trainer.config, kl_target=1e-9, actor_lr=1e-3, **config)
     tr = Trainer(cfg, trainer.env.songs, None)
     k = jax.random.split(jax.random.PRNGKey(3), 4)
     policy, obs_norm, _ = tr.init_policy(k[0])
@@ -191,8 +193,14 @@ def test_kl_target_adapts_the_actor_rate_inside_the_update(trainer):
              "logp": N.gaussian_log_prob(mu, log_std, action),          # the acting policy's: the first KL is 0
              "adv": jnp.ones((n, len(tr.columns))), "target": jnp.zeros((n, len(tr.columns)))}
     update = jax.jit(lambda p, o, b: tr.ppo_update(SimpleNamespace(params=p, opt=o, obs_norm=obs_norm,
-                                                                   iteration=jnp.int32(0)), b, jax.random.PRNGKey(0)))
-    new_params, new_opt, log = update(params, opt, batch)
+                                                                   iteration=jnp.int32(iteration)), b,
+                                                   jax.random.PRNGKey(0)))
+    return (cfg, params) + tuple(update(params, opt, batch))
+
+
+def test_kl_target_adapts_the_actor_rate_inside_the_update(trainer):
+    cfg, params, new_params, new_opt, log = kl_update(trainer)
+    n = cfg.batch
     updates = cfg.epochs * (n // cfg.minibatch)                              # 2 x 2 = 4 minibatch steps
     moved = max(jax.tree.leaves(jax.tree.map(lambda a, b: float(jnp.abs(a - b).max()),
                                              new_params["policy"], params["policy"])))
@@ -200,6 +208,18 @@ def test_kl_target_adapts_the_actor_rate_inside_the_update(trainer):
     assert moved > 0.0
     np.testing.assert_allclose(float(new_opt["lr"]), 1e-3 * 1.5 / 1.5 ** (updates - 1), rtol=1e-5)
     assert float(log["kl"]) >= 0.0 and "actor_lr" in log
+
+
+def test_kl_target_rate_holds_through_the_actor_warm_up(trainer):
+    # In a warm-up the actor stands still, so its KL is 0; adapting to that would have multiplied the rate by 1.5
+    # at each of the 4 minibatch steps (1e-3 -> 5.06e-3) and thrown the first real step far.
+    _, params, new_params, new_opt, _ = kl_update(trainer, iteration=0, actor_warmup=1)
+    assert float(new_opt["lr"]) == pytest.approx(1e-3, rel=1e-6)
+    assert jax.tree.all(jax.tree.map(np.array_equal, new_params["policy"], params["policy"]))
+    # one iteration later the warm-up is over: the same update moves the actor and adapts the rate
+    _, params, new_params, new_opt, _ = kl_update(trainer, iteration=1, actor_warmup=1)
+    assert float(new_opt["lr"]) != pytest.approx(1e-3, rel=1e-6)
+    assert not jax.tree.all(jax.tree.map(np.array_equal, new_params["policy"], params["policy"]))
 
 
 def test_weights_follow_the_paper(trainer):

@@ -82,6 +82,32 @@ def test_synchronizer_at_initialization_leaves_both_policies_actions_unchanged(p
     np.testing.assert_array_equal(mu3, mu)
 
 
+def test_a_scaled_left_hand_acts_at_its_scale_alone_and_in_the_duet(pair, tmp_path):
+    from dexguitar.learn.run import check_init
+    (left, lmeta), (right, _) = pair
+    one = PO.PolicySpec("policy", "left", 27, DUET.one_hand(0), feedforward=9)
+    scaled = PO.PolicySpec("policy", "left", 27, DUET.one_hand(0), feedforward=9, scale=0.01)
+    obs = jax.random.normal(jax.random.PRNGKey(5), (3, 451))
+    mu, log_std = PO.distribution(one, left, obs)
+    mu_s, log_std_s = PO.distribution(scaled, left, obs)
+    np.testing.assert_allclose(mu_s, 0.01 * mu, rtol=1e-5, atol=1e-9)          # mean and std: a hundredth
+    np.testing.assert_allclose(log_std_s, log_std + np.log(0.01), atol=1e-5)
+    assert PO.PolicySpec.from_meta(scaled.to_meta()) == scaled and "scale" not in one.to_meta()
+    # in a synchronizer the left hand keeps its scale and the right hand plays as it is
+    sync, norm = PO.init_synchronizer(jax.random.PRNGKey(3), left, right, DUET)
+    params = {"policy": sync, "obs_norm": norm, "frozen": {"left": left, "right": right}}
+    duet = jax.random.normal(jax.random.PRNGKey(4), (3, 902))
+    plain, _ = PO.distribution(SPEC, params, duet)
+    shrunk, _ = PO.distribution(PO.PolicySpec("synchronizer", "duet", 54, DUET, 9, 0.01), params, duet)
+    np.testing.assert_allclose(shrunk[:, :27], 0.01 * plain[:, :27], rtol=1e-5, atol=1e-9)
+    np.testing.assert_array_equal(shrunk[:, 27:], plain[:, 27:])
+    # a run starts from a policy only at the same scale
+    PO.export(tmp_path / "scaled", left, lmeta | scaled.to_meta())
+    assert check_init(tmp_path / "scaled", "left", 9, 0.01)["scale"] == 0.01
+    with pytest.raises(UserError, match="scaled by 0.01.*action_scale is 1.0"):
+        check_init(tmp_path / "scaled", "left", 9)
+
+
 def test_pair_is_checked(pair):
     (left, lmeta), (right, rmeta) = pair
     with pytest.raises(UserError, match="RIGHT: a policy for the left hand"):

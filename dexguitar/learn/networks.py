@@ -48,10 +48,15 @@ class Trunk(nn.Module):
 
 
 class Policy(nn.Module):
-    """Gaussian policy; `dz` (the synchronizer's offset) is added to the latent before the trunk."""
+    """Gaussian policy; `dz` (the synchronizer's offset) is added to the latent before the trunk.
+
+    `scale` multiplies the action (mean and std): a residual on the planner needs corrections of thousandths of a
+    half range, and Adam moves every weight by about its learning rate whatever the gradient, so a small output
+    scale keeps the usual learning rates from jumping the hand around (`TrainConfig.action_scale`)."""
 
     action_size: int
     log_std_init: float = -2.3   # std 0.1 of a half-range action = the authors' e^-3 of a full-range action
+    scale: float = 1.0
 
     def setup(self):
         self.encoder = Encoder()
@@ -65,7 +70,10 @@ class Policy(nn.Module):
 
     def head(self, z):
         x = self.trunk(z)
-        return self.mu(x), jnp.clip(self.log_std(x), -10.0, 2.0)
+        log_std = jnp.clip(self.log_std(x), -10.0, 2.0)
+        if self.scale == 1.0:
+            return self.mu(x), log_std
+        return self.scale * self.mu(x), log_std + jnp.log(self.scale)
 
     def __call__(self, frames, goal, dz=None):
         z = self.latent(frames, goal)

@@ -40,12 +40,14 @@ class PolicySpec:
     action_size: int
     layout: ObsLayout
     feedforward: int = 0      # the left hand's action is a residual on the planner's of this version (0: none)
+    scale: float = 1.0        # the left hand's network output times this (`networks.Policy.scale`)
 
     def hand_spec(self, i: int) -> "PolicySpec":
         """The single-hand policy of hand i of a synchronizer."""
         role = self.layout.roles[i]
+        left = role == "left"
         return PolicySpec("policy", role, self.action_size // self.layout.hands, self.layout.one_hand(i),
-                          self.feedforward if role == "left" else 0)
+                          self.feedforward if left else 0, self.scale if left else 1.0)
 
     def env_config(self, config):
         """`config` (an `EnvConfig`) as this policy must be played in: on the planner's feedforward or not."""
@@ -54,7 +56,8 @@ class PolicySpec:
     def to_meta(self) -> dict:
         return {"kind": self.kind, "hand": self.hand, "action_size": self.action_size,
                 "layout": self.layout.to_dict(), "obs_size": self.layout.obs_size,
-                "goal_size": self.layout.goal_size} | ({"feedforward": int(self.feedforward)} if self.feedforward else {})
+                "goal_size": self.layout.goal_size} | ({"feedforward": int(self.feedforward)} if self.feedforward else {}) \
+            | ({"scale": float(self.scale)} if self.scale != 1.0 else {})
 
     @classmethod
     def from_meta(cls, meta: dict) -> "PolicySpec":
@@ -65,7 +68,8 @@ class PolicySpec:
             goal = meta["goal_size"] // len(roles)
             layout = ObsLayout(roles, 2, (meta["obs_size"] - meta["goal_size"]) // (2 * len(roles)), goal, 6)
         return cls(meta.get("kind", "policy"), meta["hand"], meta["action_size"], layout,
-                   int(meta.get("feedforward", 0)))         # true (the first residuals) = version 1
+                   int(meta.get("feedforward", 0)),         # true (the first residuals) = version 1
+                   float(meta.get("scale", 1.0)))
 
 
 # ----------------------------------------------------------------------------------------------------- acting
@@ -74,7 +78,8 @@ def distribution(spec: PolicySpec, params: dict, obs):
     """(mean, log std) of the action on a batch of observations."""
     frames, goal = spec.layout.split(obs)
     if spec.kind == "policy":
-        return N.Policy(spec.action_size).apply(params["policy"], N.normalize(params["obs_norm"], frames), goal)
+        return N.Policy(spec.action_size, scale=spec.scale).apply(params["policy"],
+                                                                  N.normalize(params["obs_norm"], frames), goal)
     shared = N.normalize(params["obs_norm"], frames)        # the synchronizer's encoders read its own normalizer
     dz = N.Synchronizer().apply(params["policy"], *spec.layout.hand_parts(shared, goal, 0),
                                 *spec.layout.hand_parts(shared, goal, 1))
@@ -82,8 +87,8 @@ def distribution(spec: PolicySpec, params: dict, obs):
     for i, role in enumerate(spec.layout.roles):
         frozen = params["frozen"][role]
         f, g = spec.layout.hand_parts(frames, goal, i)
-        out.append(N.Policy(spec.action_size // 2).apply(frozen["policy"], N.normalize(frozen["obs_norm"], f), g,
-                                                         dz[i]))
+        out.append(N.Policy(spec.action_size // 2, scale=spec.hand_spec(i).scale).apply(
+            frozen["policy"], N.normalize(frozen["obs_norm"], f), g, dz[i]))
     return jnp.concatenate([out[0][0], out[1][0]], -1), jnp.concatenate([out[0][1], out[1][1]], -1)
 
 

@@ -181,9 +181,10 @@ def export(trainer: Trainer, state, directory) -> None:
     PO.export(directory, trainer.actor_params(state.params, state.obs_norm), meta)
 
 
-def check_init(init_from, hand: str, feedforward: int) -> dict:
-    """The meta of the exported policy that a run of `hand` starts from, if it can: a policy of that hand, and a
-    residual on the planner exactly when the run trains one (`EnvConfig.feedforward`). Reads no weights."""
+def check_init(init_from, hand: str, feedforward: int, scale: float = 1.0) -> dict:
+    """The meta of the exported policy that a run of `hand` starts from, if it can: a policy of that hand, a
+    residual on the planner exactly when the run trains one (`EnvConfig.feedforward`), and of the run's action scale
+    (`TrainConfig.action_scale`). Reads no weights."""
     meta = PO.read_meta(init_from)
     if meta.get("hand") != hand or meta.get("kind", "policy") != "policy":
         raise UserError(f"--init-from {init_from}: a {meta.get('hand')} hand {meta.get('kind', 'policy')}, not a "
@@ -193,6 +194,10 @@ def check_init(init_from, hand: str, feedforward: int) -> dict:
         what = {True: "a residual on the IK planner", False: "a plain policy"}
         raise UserError(f"--init-from {init_from}: {what[residual]}, but this run's ENV trains {what[feedforward]} "
                         "(EnvConfig.feedforward)")
+    theirs = PO.PolicySpec.from_meta(meta).scale
+    if theirs != scale:
+        raise UserError(f"--init-from {init_from}: its actions are scaled by {theirs}, but this run's "
+                        f"TrainConfig.action_scale is {scale}")
     return meta
 
 
@@ -234,7 +239,7 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
             log(f"resumed {run.path} at iteration {step} from its compact state (envs, replay buffers and Adam "
                 "start afresh)")
         elif init_from:
-            meta_init = check_init(init_from, cfg.hand, trainer.env.config.feedforward)
+            meta_init = check_init(init_from, cfg.hand, trainer.env.config.feedforward, cfg.action_scale)
             params = PO.load(init_from)[0]
             state = state.replace(params=dict(state.params, policy=params["policy"]), obs_norm=params["obs_norm"])
             log(f"policy initialized from {init_from} ({meta_init.get('samples', 0):,} samples)")

@@ -37,7 +37,8 @@ class SyncTrainer(Trainer):
         """left, right: (params {"policy", "obs_norm"}, meta) of exported single-hand policies."""
         if config.hand != "duet":
             config = dataclasses.replace(config, hand="duet")
-        env_config = PolicySpec.from_meta(left[1]).env_config(env_config or SYNC_ENV)   # a residual left hand
+        self.left_spec = PolicySpec.from_meta(left[1])                                 # read by make_spec
+        env_config = self.left_spec.env_config(env_config or SYNC_ENV)                 # a residual left hand
         super().__init__(config, songs, reference, env_config)
         check_pair(left[1], right[1], self.layout, where=(left[1].get("path", "LEFT"), right[1].get("path",
                                                                                                     "RIGHT")))
@@ -45,7 +46,8 @@ class SyncTrainer(Trainer):
         self.sources = {"left": left[1], "right": right[1]}
 
     def make_spec(self) -> PolicySpec:
-        return PolicySpec("synchronizer", "duet", self.env.action_size, self.layout, self.env.config.feedforward)
+        return PolicySpec("synchronizer", "duet", self.env.action_size, self.layout, self.env.config.feedforward,
+                          self.left_spec.scale)
 
     def init_inputs(self) -> dict:
         return dict(super().init_inputs(), frozen=self.frozen)   # arguments of `init`: one program for any pair

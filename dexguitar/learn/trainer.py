@@ -60,6 +60,7 @@ class TrainConfig:
     actor_warmup: int = 0             # iterations in which only the critic and discriminators learn (warm starts)
     log_std_init: float = -2.3        # initial log std of the actions: std 0.1 of a half range (reference §7.1)
     kl_target: float = 0.0            # > 0: the actor's learning rate adapts to hold this KL per minibatch step
+    action_scale: float = 1.0         # the policy's action times this (`networks.Policy.scale`; 1: the paper's)
     seed: int = 42
 
     @property
@@ -76,6 +77,8 @@ class TrainConfig:
             raise ValueError(f"TrainConfig.actor_warmup must be at least 0, got {self.actor_warmup}")
         if self.kl_target < 0:
             raise ValueError(f"TrainConfig.kl_target must be at least 0, got {self.kl_target}")
+        if not self.action_scale > 0:
+            raise ValueError(f"TrainConfig.action_scale must be above 0, got {self.action_scale}")
         if self.minibatch > self.batch:
             raise ValueError(f"TrainConfig.minibatch {self.minibatch} exceeds the batch of {self.num_envs} envs x "
                              f"{self.horizon} steps = {self.batch}")
@@ -175,7 +178,7 @@ class Trainer:
 
     def make_spec(self) -> PolicySpec:
         return PolicySpec("policy", self.config.hand, self.env.action_size, self.layout,
-                          self.env.config.feedforward)
+                          self.env.config.feedforward, self.config.action_scale)
 
     # ------------------------------------------------------------------------------------------ init
     def init(self, key=None) -> TrainState:
@@ -225,7 +228,7 @@ class Trainer:
     # ------------------------------------------------------------------------------------------ pieces
     def init_policy(self, key, inputs: dict | None = None):
         """(trainable policy parameters, observation normalizer, frozen parameters or None); `inputs`: `init`'s."""
-        policy = N.Policy(self.env.action_size, self.config.log_std_init)
+        policy = N.Policy(self.env.action_size, self.config.log_std_init, self.config.action_scale)
         params = N.init_params(policy, key, (self.layout.history, self.layout.frame_size), (self.layout.goal_size,))
         if self.env.config.feedforward:   # a residual starts at exactly zero (the planner), not at +-0.03
             mu = dict(params["params"]["mu"], kernel=jnp.zeros_like(params["params"]["mu"]["kernel"]))
@@ -338,9 +341,12 @@ class Trainer:
                 for name in ("policy", "critic"):
                     updates, new_opt[name] = self.optimizers[name].update(grads[name], opt[name], params[name])
                     if name == "policy" and cfg.kl_target:
-                        # the KL of this minibatch before its step sets the step's rate (held at 0 in a warm-up)
-                        new_opt["lr"] = adapt_lr(opt["lr"], log["kl"], cfg.kl_target)
-                        rate = jnp.where(ts.iteration < cfg.actor_warmup, 0.0, new_opt["lr"])
+                        # the KL of this minibatch before its step sets the step's rate. In a warm-up the step is 0
+                        # and the rate stays as it is: the KL of a still actor is 0, and adapting to it would climb
+                        # to the upper bound and throw the first real step far (the sixteenth session's KL 52,000).
+                        warm = ts.iteration < cfg.actor_warmup
+                        new_opt["lr"] = jnp.where(warm, opt["lr"], adapt_lr(opt["lr"], log["kl"], cfg.kl_target))
+                        rate = jnp.where(warm, 0.0, new_opt["lr"])
                         updates = jax.tree.map(lambda u: rate * u, updates)
                         log = dict(log, actor_lr=new_opt["lr"])
                     new_params[name] = optax.apply_updates(params[name], updates)
