@@ -10,7 +10,9 @@ the deterministic playing that is judged.
 Measured (results/official_songs.md, sixteenth session, one H200): it does not train. Window F1 0.551 in the critic
 warm-up; the first actor updates after it moved the policy by a KL of 52,000, every episode then ended in a
 termination, and F1 stayed 0.000 for 550 iterations with the learning rate at its floor (1e-6). Kept as the record of
-that run (results/general_left/session16/gentle_residual/).
+that run (results/general_left/session16/gentle_residual/). The cause (seventeenth session): the adaptive rate had
+climbed to its ceiling of 1e-2 during the warm-up, where the still actor's KL is 0. The rate now holds through a
+warm-up (left_general_scaled.py).
 
     dexguitar train --hand left --style general --procedural 256 --config experiments/left_general_gentle.py \
         --out runs/left-general-gentle --max-minutes 19

@@ -238,3 +238,20 @@ def test_version_9_searches_the_fingerings_with_a_pair():
         return hand.fingering(notes)[1][1], [strings_held(press, goal, onset, i) for i in (1, 2)]
     assert held(8) == ({0: (3, 2), 1: (2, 2), 2: (1, 2)}, [2, 2])
     assert held(9) == ({0: (PAIR + 2, 2), 1: (1, 2)}, [3, 3])
+
+
+def test_version_10_reaches_a_first_note_that_comes_at_once():
+    """beethoven_virus opens with fret 9 on string 3 for 12 frames right after the 5-frame rest, two frets above the
+    home position. Version 9 takes 10 frames from the home pose to the first position and holds the note for less than
+    2/3 of it; version 10 ends that move by the first onset. A song whose first note comes 10 frames later or more, or
+    lies far up the neck (canon_in_d_major1: fret 17, where the wrist lags a quick move), plans exactly as before."""
+    goal = np.array([[0] * 6, [0, 0, 9, 0, 0, 0], [0, 10, 0, 0, 0, 0], [7, 0, 0, 0, 0, 0], [8, 0, 0, 0, 0, 0]])
+    onset = np.array([0, 5, 17, 29, 41, 53])                      # beethoven_virus's first notes, as the env plans them
+    notes = Notes(goal, goal > 0, onset)
+    held = {v: [strings_held(tracked_presses(ScriptedLeft(version=v), notes), goal, onset, i) for i in range(1, 5)]
+            for v in (9, 10)}
+    assert held == {9: [0, 1, 1, 1], 10: [1, 1, 1, 1]}
+    later = Notes(goal, goal > 0, np.r_[0, onset[1:] + 5])
+    far = Notes(np.where(goal > 0, goal + 8, 0), goal > 0, onset)
+    for same in (later, far):
+        np.testing.assert_array_equal(ScriptedLeft(10).desired(same), ScriptedLeft(9).desired(same))

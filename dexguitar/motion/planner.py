@@ -335,8 +335,9 @@ POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fi
 # (`ScriptedLeft.search_steady`); 7 and one finger across two neighbouring strings pressed at one fret, where that
 # fingering holds the note (`ScriptedLeft.pair_fingering`); 8 and hand positions chosen for the whole song, with as
 # few and as small moves as cover its notes (`ScriptedLeft.positions`), instead of moving only when a note leaves one;
-# 9 and, where the rule's fingering with pairs does not hold, the cheapest other fingering with them that does.
-LATEST = 9
+# 9 and, where the rule's fingering with pairs does not hold, the cheapest other fingering with them that does;
+# 10 and the first move from the home pose ends by the first onset where that position is near home (`first_frames`).
+LATEST = 10
 PAIR = 10               # a finger pressing strings s and s + 1 (0-based) at one fret: "string" PAIR + s (version 7)
 
 
@@ -364,6 +365,8 @@ class ScriptedLeft:
     quick_frames = 3        # version 3: a lift or landing beside a note of n < 7 frames takes max(n - 2, this)
     shift_frames = 10       # hand position change (the wrist slides are slow: kp 10 on 0.2 kg)
     start_frames = 10       # from the home pose to the first note's position
+    first_frames = 4        # version 10: ... or faster, down to this, to end by a first onset that comes sooner,
+    first_reach = 3         # where the first position is this many frets from home or fewer (farther: the wrist lags)
     search_limit = 40       # candidate fingerings tried per note, cheapest first
     check_frames = 10       # a fingering is tried by moving to it from the note before, then holding this long
 
@@ -748,8 +751,12 @@ class ScriptedLeft:
             q, vias = cfg[i]
             tb = notes.onset[i] + 0.5
             if i == 0:
+                start = self.start_frames
+                if self.version >= 10 and abs(plan[0][0] - HOME_POSITION) <= self.first_reach:
+                    first = next((j for j in range(notes.n) if np.any(notes.left[j] != 0)), 0)
+                    start = min(start, max(self.first_frames, int(notes.onset[first])))   # a song that starts at once
                 for gi, dofs in enumerate(groups):
-                    events[gi].append((0.0, float(self.start_frames), q[dofs], None))
+                    events[gi].append((0.0, float(start), q[dofs], None))
                 continue
             dur = notes.onset[i] - notes.onset[i - 1]           # the note before
             if self.version >= 4:                # move before the onset, into the slack of the note before
