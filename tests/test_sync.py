@@ -108,6 +108,27 @@ def test_a_scaled_left_hand_acts_at_its_scale_alone_and_in_the_duet(pair, tmp_pa
         check_init(tmp_path / "scaled", "left", 9)
 
 
+def test_a_cpu_plays_the_duet_a_few_songs_at_a_time(tmp_path, monkeypatch):
+    """Five or six songs in one duet program stalled XLA's CPU run on a 2-core machine, so a CPU plays the duet
+    `CPU_DUET_SONGS` songs at a time. Here one at a time, with the shipped general pair: two songs take the
+    one-song program, each scores exactly as it does alone, and songs of one title keep apart by their place."""
+    from dexguitar.cli import POLICIES
+    from dexguitar.music import load_song
+    from dexguitar.perform import evaluate as EV
+    from dexguitar.perform.play import pair as general_pair
+    params, spec = general_pair(POLICIES / "left_general", POLICIES / "right_mixed")
+    (tmp_path / "tiny.txt").write_text(TINY_SONG)
+    song = load_song(tmp_path / "tiny.txt")
+    monkeypatch.setattr(EV, "CPU_DUET_SONGS", 1)
+    monkeypatch.setattr(EV, "_CACHE", {})
+    two = EV.evaluate(params, spec, [song, song])
+    one = EV.evaluate(params, spec, [song])
+    assert len(EV._CACHE) == 1                                  # a single program, of one song's shape
+    assert list(two) == [song.title, f"{song.title} (1)"] and list(one) == [song.title]
+    assert two[song.title] == one[song.title] == two[f"{song.title} (1)"]
+    assert two[song.title]["summary"]["both"]["notes"] == 3                  # two notes and a chord, all judged
+
+
 def test_pair_is_checked(pair):
     (left, lmeta), (right, rmeta) = pair
     with pytest.raises(UserError, match="RIGHT: a policy for the left hand"):

@@ -23,6 +23,9 @@ from dexguitar.motion import feedforward as FF
 from dexguitar.music import timeline as TL
 
 HANDS = {"left": ("left",), "right": ("right",), "duet": ("left", "right", "both")}
+# Songs a CPU plays at once in the duet. Five or six in one program stalled XLA's CPU run on a 2-core machine (the
+# process idle in `device_get`, three times out of three; seventeenth session); four or fewer never did.
+CPU_DUET_SONGS = 4
 
 
 def rollout_notes(env, act, params, song_index, key, hands):
@@ -166,20 +169,24 @@ def summarize(rows, hands) -> dict:
 
 
 def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str | None = None) -> dict:
-    """F1 of a policy on each song, all songs played at once (one env each). `hand` defaults to the policy's
-    (a synchronizer plays the duet). Returns {title: {"summary", "notes"}}."""
+    """F1 of a policy on each song, all songs played at once (one env each; the duet on a CPU: `CPU_DUET_SONGS` at
+    a time). `hand` defaults to the policy's (a synchronizer plays the duet). Returns {title: {"summary", "notes"}}."""
     hand = hand or spec.hand
     cfg = spec.env_config(env_config or E.EnvConfig()).evaluation()
-    batch = FF.prepare(TL.batch([TL.from_song(s) for s in songs]), cfg)
     params = jax.tree.map(jnp.asarray, params)
-    play = _compiled(hand, cfg, spec, params, batch)
-    scores, ended, dur = jax.device_get(play(params, batch))
+    size = CPU_DUET_SONGS if hand == "duet" and jax.default_backend() == "cpu" else max(len(songs), 1)
     results = {}
-    for i, song in enumerate(songs):
-        rows = note_rows(scores[i], ended[i], np.asarray(dur[i]), song, HANDS[hand])
-        title = song.title or f"song{i}"
-        results[title if title not in results else f"{title} ({i})"] = {"summary": summarize(rows, HANDS[hand]),
-                                                                        "notes": rows}
+    for start in range(0, len(songs), size):
+        part = songs[start:start + size]
+        batch = FF.prepare(TL.batch([TL.from_song(s) for s in part]), cfg)
+        play = _compiled(hand, cfg, spec, params, batch)
+        scores, ended, dur = jax.device_get(play(params, batch))
+        for j, song in enumerate(part):
+            i = start + j
+            rows = note_rows(scores[j], ended[j], np.asarray(dur[j]), song, HANDS[hand])
+            title = song.title or f"song{i}"
+            results[title if title not in results else f"{title} ({i})"] = {"summary": summarize(rows, HANDS[hand]),
+                                                                            "notes": rows}
     return results
 
 
