@@ -54,10 +54,13 @@ class PolicySpec:
         return dataclasses.replace(config, feedforward=self.feedforward)
 
     def to_meta(self) -> dict:
-        return {"kind": self.kind, "hand": self.hand, "action_size": self.action_size,
-                "layout": self.layout.to_dict(), "obs_size": self.layout.obs_size,
-                "goal_size": self.layout.goal_size} | ({"feedforward": int(self.feedforward)} if self.feedforward else {}) \
-            | ({"scale": float(self.scale)} if self.scale != 1.0 else {})
+        meta = {"kind": self.kind, "hand": self.hand, "action_size": self.action_size,
+                "layout": self.layout.to_dict(), "obs_size": self.layout.obs_size, "goal_size": self.layout.goal_size}
+        if self.feedforward:
+            meta["feedforward"] = int(self.feedforward)
+        if self.scale != 1.0:
+            meta["scale"] = float(self.scale)
+        return meta
 
     @classmethod
     def from_meta(cls, meta: dict) -> "PolicySpec":

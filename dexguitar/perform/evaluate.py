@@ -23,8 +23,8 @@ from dexguitar.motion import feedforward as FF
 from dexguitar.music import timeline as TL
 
 HANDS = {"left": ("left",), "right": ("right",), "duet": ("left", "right", "both")}
-# Songs a CPU plays at once in the duet. Five or six in one program stalled XLA's CPU run on a 2-core machine (the
-# process idle in `device_get`, three times out of three; seventeenth session); four or fewer never did.
+# Songs a CPU plays at once in the duet. Five or six in one program stalled XLA's CPU run on a 2-core machine every
+# time (the process idle in `device_get`; sixteenth and seventeenth sessions); four or fewer never did.
 CPU_DUET_SONGS = 4
 
 
