@@ -255,3 +255,19 @@ def test_version_10_reaches_a_first_note_that_comes_at_once():
     far = Notes(np.where(goal > 0, goal + 8, 0), goal > 0, onset)
     for same in (later, far):
         np.testing.assert_array_equal(ScriptedLeft(10).desired(same), ScriptedLeft(9).desired(same))
+
+
+def test_version_11_shifts_the_hand_quickly_between_short_notes():
+    """Two 9-frame notes at fret 3, then two at fret 10 and back, on string 2 (snow and beethoven_virus move the hand
+    like this). Version 10 slides the wrist over 10 frames centred on the change (led by a frame), which eats up to 6
+    frames of a 9-frame note beside it: on the tracked motion the note before the move back loses its 2/3. Version 11
+    moves in 2 * (9 - 6) + 2 = 8 frames there and every note holds. Notes of 15 frames or more move as before."""
+    line = [3, 3, 10, 10, 3, 3]
+    goal = np.array([[0] * 6] + [[0, k, 0, 0, 0, 0] for k in line])
+    onset = np.r_[0, 20 + 9 * np.arange(len(line) + 1)]
+    notes = Notes(goal, goal > 0, onset)
+    held = {v: [strings_held(tracked_presses(ScriptedLeft(version=v), notes), goal, onset, i)
+                for i in range(1, len(line) + 1)] for v in (10, 11)}
+    assert held == {10: [1, 1, 1, 0, 1, 1], 11: [1] * len(line)}
+    slow = Notes(goal, goal > 0, np.r_[0, 20 + 15 * np.arange(len(line) + 1)])
+    np.testing.assert_array_equal(ScriptedLeft(11).desired(slow), ScriptedLeft(10).desired(slow))

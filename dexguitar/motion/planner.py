@@ -336,8 +336,10 @@ POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fi
 # fingering holds the note (`ScriptedLeft.pair_fingering`); 8 and hand positions chosen for the whole song, with as
 # few and as small moves as cover its notes (`ScriptedLeft.positions`), instead of moving only when a note leaves one;
 # 9 and, where the rule's fingering with pairs does not hold, the cheapest other fingering with them that does;
-# 10 and the first move from the home pose ends by the first onset where that position is near home (`first_frames`).
-LATEST = 10
+# 10 and the first move from the home pose ends by the first onset where that position is near home (`first_frames`);
+# 11 and a hand position change between notes shorter than 12 frames takes less than `shift_frames`, so that each note
+# beside it keeps 2/3 of itself (`shift_min`).
+LATEST = 11
 PAIR = 10               # a finger pressing strings s and s + 1 (0-based) at one fret: "string" PAIR + s (version 7)
 
 
@@ -364,6 +366,7 @@ class ScriptedLeft:
     lead_frames = 2         # version 4: changes lead the onset by up to this, leaving 2/3 of the note before + 2
     quick_frames = 3        # version 3: a lift or landing beside a note of n < 7 frames takes max(n - 2, this)
     shift_frames = 10       # hand position change (the wrist slides are slow: kp 10 on 0.2 kg)
+    shift_min = 7           # version 11: ... or 2 (n - 2n/3) + 2 beside a note of n < 12 frames, not below this
     start_frames = 10       # from the home pose to the first note's position
     first_frames = 4        # version 10: ... or faster, down to this, to end by a first onset that comes sooner,
     first_reach = 3         # where the first position is this many frets from home or fewer (farther: the wrist lags)
@@ -766,6 +769,9 @@ class ScriptedLeft:
             goal_a, goal_b = notes.left[i - 1], notes.left[i]
             if p_a != p_b:
                 w = self.shift_frames
+                if self.version >= 11:          # between short notes: quicker, so that each keeps 2/3 of itself
+                    nxt = notes.onset[i + 1] - notes.onset[i]
+                    w = min(w, max(self.shift_min, 2 * (min(dur, nxt) - (2 * min(dur, nxt) + 2) // 3) + 2))
                 for gi, dofs in enumerate(groups):
                     events[gi].append((tb - w / 2, tb + w / 2, q[dofs], None))
                 for f in set(f_a) & set(f_b):                  # same finger, same string: slide along it

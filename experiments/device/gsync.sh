@@ -10,6 +10,8 @@
 # last line of this script's output is "gsync done".
 mkdir -p /tmp/official /tmp/runs/gsync /tmp/plans && cp "$REPO"/.data/official/*.json /tmp/official/
 export DEXGUITAR_PLANS=/tmp/plans
+# Plans made beforehand on a CPU (DEXGUITAR_PLANS=$PWD/.data/plans there) skip the planning here.
+ls "$REPO"/.data/plans/*.npz > /dev/null 2>&1 && cp "$REPO"/.data/plans/*.npz /tmp/plans/
 group() {
   for s in $1; do
     # A song already started (here or by another group) is left alone: its run and log stay as they are.
