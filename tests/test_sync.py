@@ -113,6 +113,7 @@ def test_a_cpu_plays_the_duet_a_few_songs_at_a_time(tmp_path, monkeypatch):
     `CPU_DUET_SONGS` songs at a time. Here one at a time, with the shipped general pair: two songs take the
     one-song program, each scores exactly as it does alone, and songs of one title keep apart by their place."""
     from dexguitar.cli import POLICIES
+    from dexguitar.motion import feedforward as FF
     from dexguitar.music import load_song
     from dexguitar.perform import evaluate as EV
     from dexguitar.perform.play import pair as general_pair
@@ -127,6 +128,16 @@ def test_a_cpu_plays_the_duet_a_few_songs_at_a_time(tmp_path, monkeypatch):
     assert list(two) == [song.title, f"{song.title} (1)"] and list(one) == [song.title]
     assert two[song.title] == one[song.title] == two[f"{song.title} (1)"]
     assert two[song.title]["summary"]["both"]["notes"] == 3                  # two notes and a chord, all judged
+    # songs not planned yet are planned together, in one pool of planner processes, before the first chunk plays
+    (tmp_path / "other.txt").write_text(TINY_SONG.replace("B|----1", "B|----3"))
+    other = load_song(tmp_path / "other.txt")
+    monkeypatch.setenv("DEXGUITAR_PLANS", str(tmp_path / "plans"))
+    pools = []
+    plan_all = FF.plan_all
+    monkeypatch.setattr(FF, "plan_all", lambda jobs, *a, **k: pools.append(len(jobs)) or plan_all(jobs, *a, **k))
+    mixed = EV.evaluate(params, spec, [song, other])
+    assert pools == [2] and len(EV._CACHE) == 1
+    assert mixed[song.title] == one[song.title] and mixed[f"{song.title} (1)"] != one[song.title]
 
 
 def test_pair_is_checked(pair):

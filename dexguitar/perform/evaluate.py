@@ -175,10 +175,13 @@ def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str |
     cfg = spec.env_config(env_config or E.EnvConfig()).evaluation()
     params = jax.tree.map(jnp.asarray, params)
     size = CPU_DUET_SONGS if hand == "duet" and jax.default_backend() == "cpu" else max(len(songs), 1)
+    timelines = [TL.from_song(s) for s in songs]
+    if cfg.feedforward and size < len(songs):       # plan every song in one pool; the chunks read the plans' disk cache
+        FF.prepare(TL.batch(timelines), cfg)
     results = {}
     for start in range(0, len(songs), size):
         part = songs[start:start + size]
-        batch = FF.prepare(TL.batch([TL.from_song(s) for s in part]), cfg)
+        batch = FF.prepare(TL.batch(timelines[start:start + size]), cfg)
         play = _compiled(hand, cfg, spec, params, batch)
         scores, ended, dur = jax.device_get(play(params, batch))
         for j, song in enumerate(part):
