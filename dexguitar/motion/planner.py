@@ -763,22 +763,21 @@ class ScriptedLeft:
                 continue
             dur = notes.onset[i] - notes.onset[i - 1]           # the note before
             if self.version >= 4:                # move before the onset, into the slack of the note before
-                tb -= min(self.lead_frames, max(0, dur - (2 * dur + 2) // 3 - 2))
+                tb -= min(self.lead_frames, max(0, _spare(dur) - 2))
             q_prev = cfg[i - 1][0]
             (p_a, f_a), (p_b, f_b) = plan[i - 1], plan[i]
             goal_a, goal_b = notes.left[i - 1], notes.left[i]
+            short = min(notes.onset[i + 1] - notes.onset[i], dur)
             if p_a != p_b:
                 w = self.shift_frames
                 if self.version >= 11:          # between short notes: quicker, so that each keeps 2/3 of itself
-                    nxt = notes.onset[i + 1] - notes.onset[i]
-                    w = min(w, max(self.shift_min, 2 * (min(dur, nxt) - (2 * min(dur, nxt) + 2) // 3) + 2))
+                    w = min(w, max(self.shift_min, 2 * _spare(short) + 2))
                 for gi, dofs in enumerate(groups):
                     events[gi].append((tb - w / 2, tb + w / 2, q[dofs], None))
                 for f in set(f_a) & set(f_b):                  # same finger, same string: slide along it
                     if f_a[f][0] == f_b[f][0]:
                         slides.append((tb - w / 2, tb + w / 2, f, f_b[f][0], f_a[f][1], f_b[f][1]))
                 continue
-            short = min(notes.onset[i + 1] - notes.onset[i], dur)
             lift, land = self.lift_frames, self.land_frames
             if self.version >= 3:
                 lift, land = (min(x, max(self.quick_frames, short - 2)) for x in (lift, land))
@@ -855,6 +854,11 @@ def _press_fn():
 def _pressed(segments) -> np.ndarray:
     """(6,) frets pressed by finger segments (12, 2, 3), as the env detects them."""
     return np.asarray(_press_fn()(jnp.asarray(segments, jnp.float32)))
+
+
+def _spare(n: int) -> int:
+    """Frames of an n-frame note beyond the 2/3 of it that must be held (`scoring.close`)."""
+    return n - (2 * n + 2) // 3
 
 
 def _harmless(goal, s: int, k: int) -> bool:
