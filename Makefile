@@ -8,7 +8,7 @@ STAMP := $(VENV)/.installed-stamp
 SONG ?= ode_to_joy
 CONFIG_LEFT ?= experiments/left_gpu.py
 CONFIG_RIGHT ?= experiments/right_gpu.py
-CONFIG_SYNC ?= experiments/sync_songs.py
+CONFIG_SYNC ?= experiments/sync_hold.py
 # make sync: the general pair (GSync) unless LEFT=/RIGHT= name others
 LEFT ?= models/policies/left_general
 RIGHT ?= models/policies/right_mixed

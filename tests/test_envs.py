@@ -1,6 +1,7 @@
 """The env protocol on CPU with 4 envs: jit + vmap, determinism, auto-reset, windows, observation layout."""
 import chex
 import jax
+import jax.extend
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -129,3 +130,27 @@ def test_right_and_duet_step_under_jit_and_vmap(hand, obs, columns, hands):
     w = state.cursor.window
     assert np.asarray(w.pick)[0, 1:3].tolist() in ([[True] * 6, [True] * 5 + [False]],
                                                   [[True] * 5 + [False], [False] * 6])
+
+
+def _dots(jaxpr):
+    """Every dot_general of a jaxpr, nested ones (jit, scan, while, cond) included."""
+    for eqn in jaxpr.eqns:
+        if eqn.primitive.name == "dot_general":
+            yield eqn
+        for sub in jax.extend.core.jaxprs_in_params(eqn.params):
+            yield from _dots(sub)
+
+
+@pytest.mark.parametrize("hand", ["left", "duet"])
+def test_env_matmuls_are_full_float32(hand):
+    """A GPU's default float32 matmul is TF32, which on an H100 cost the planned left hand 0.07 F1 on snow: every
+    matmul of the world (physics, kinematics, detection, in reset and in step) asks for HIGHEST precision."""
+    env = envs.make(hand, [chord_song()])
+    state = jax.eval_shape(env.reset, jax.random.PRNGKey(0))
+    for fn, args in ((env.reset, (jax.random.PRNGKey(0),)), (env.step, (state, jnp.zeros(env.action_size)))):
+        dots = list(_dots(jax.make_jaxpr(fn)(*args).jaxpr))
+        assert len(dots) > 10
+        assert {eqn.params["precision"] for eqn in dots} == {(jax.lax.Precision.HIGHEST,) * 2}
+    # what is outside an env keeps JAX's default
+    plain = jax.make_jaxpr(jnp.dot)(jnp.ones((3, 3)), jnp.ones(3)).jaxpr
+    assert [eqn.params["precision"] for eqn in _dots(plain)] == [None]

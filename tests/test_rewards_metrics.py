@@ -249,3 +249,34 @@ def test_per_note_both_shifts_the_verdicts_to_their_notes():
     both = np.array([[9.0], [1.0], [2.0]])        # at the ends of notes 0, 1, 2: the verdicts of -, 0, 1
     now = np.array([[7.0], [8.0], [3.0]])         # note 2 is the last: its own verdict
     assert M.per_note_both(both, now)[:, 0].tolist() == [1.0, 2.0, 3.0]
+
+
+def _completions(goal, presses, picks, targets, frames, tally=None):
+    """The steps (indices) at which `holds_completed` fires, string by string, over one note; and the next tally."""
+    tally = M.empty_tally() if tally is None else tally
+    fired = []
+    for t, (press, pick) in enumerate(zip(presses, picks)):
+        after = M.update(tally, jnp.asarray(press), jnp.asarray(goal), jnp.asarray(pick, bool), None)
+        done = np.asarray(M.holds_completed(tally, after, frames, jnp.asarray(targets)))
+        fired += [(t, s) for s in np.flatnonzero(done)]
+        tally = after
+    return fired, M.close(tally, frames, jnp.asarray(goal), jnp.asarray(targets))[1]
+
+
+def test_hold_completions_fire_once_when_the_both_hands_verdict_becomes_right():
+    """The duet's hold reward counts the strings whose rule-(3) hold completes in a step: once per string."""
+    goal, targets = [0, 5, 0, 0, 0, 0], [False, True, False, False, False, False]
+    on, off, idle, pick = [0, 5, 0, 0, 0, 0], [0] * 6, [0] * 6, [0, 1, 0, 0, 0, 0]
+    # 9 frames (need 6): picked at frame 0 while pressed -> held frames 0..5 -> fires at step 5, string 2 (index 1)
+    assert _completions(goal, [on] * 9, [pick] + [idle] * 8, targets, 9)[0] == [(5, 1)]
+    # released after 4 frames: never
+    assert _completions(goal, [on] * 4 + [off] * 5, [pick] + [idle] * 8, targets, 9)[0] == []
+    # picked before the press: never
+    assert _completions(goal, [off] + [on] * 8, [pick] + [idle] * 8, targets, 9)[0] == []
+    # a pick of a string that is no target: never
+    assert _completions(goal, [on] * 9, [[1, 0, 0, 0, 0, 0]] + [idle] * 8, targets, 9)[0] == []
+    # picked at frame 5: 4 frames inside the note, then 2 of the next -> fires at the next note's step 1
+    fired, tally = _completions(goal, [on] * 9, [idle] * 5 + [pick] + [idle] * 3, targets, 9)
+    assert fired == []
+    assert _completions(goal, [on] * 9, [idle] * 9, [False] * 6, 9, tally)[0] == [(1, 1)]
+    assert _completions(goal, [on] + [off] * 8, [idle] * 9, [False] * 6, 9, tally)[0] == []

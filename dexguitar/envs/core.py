@@ -33,7 +33,7 @@ from dexguitar.world import hands as H
 from dexguitar.world import scene as S
 from dexguitar.world.geometry import positive_w, quat_conj, quat_mul, quat_to_mat
 from dexguitar.world.guitar import N_STRINGS, Guitar
-from dexguitar.world.physics import control_step
+from dexguitar.world.physics import control_step, exact
 
 mjx = _quiet_mjx()
 
@@ -60,6 +60,8 @@ class EnvConfig:
     fill_strum_gaps: bool = True         # strings between the outer targets of a strum are targets too (§3.6)
     sequential: bool = False             # evaluation: whole songs from the start, episode ends with the song
     ready_after: int = -1                # duet gate: -1 = the paper's strict gate; k >= 0 = relaxed after k frames
+    hold_reward: float = 0.0             # duet, not in the paper: added to the pick column per string whose
+                                         # both-hands hold (rule (3) of both-hands F1) completes in the step
     mirror: bool = False                 # the left-handed player's scene
     feedforward: int = 0                 # the left action is a residual on the planner's (`motion.feedforward`)
                                          # of this version (`motion.planner.LATEST`; True = 1); 0: none
@@ -251,6 +253,7 @@ class GuitarEnv:
     def sample_window(self, key, song=None) -> CU.Window:
         return CU.sample_window(self.songs, key, self.window_capacity, song=song, **self.config.window_args())
 
+    @exact
     def reset(self, key, song=None) -> State:
         k_win, k_noise, k_next = jax.random.split(key, 3)
         window = self.sample_window(k_win, song)
@@ -294,6 +297,7 @@ class GuitarEnv:
         start from a sensible hand and the scripted player's actions a plain (target - home) / half-range."""
         return jnp.clip(self._home + jnp.clip(action, -1.0, 1.0) * self._ctrl_half, self._ctrl_lo, self._ctrl_hi)
 
+    @exact
     def step(self, state: State, action) -> State:
         """One control step: physics, detection, rewards, scoring, and the cursor moved on. Physics that went
         non-finite (a NaN action, an exploding contact) terminates the episode with `info["nonfinite"]` set."""
@@ -309,6 +313,10 @@ class GuitarEnv:
         goal_left, targets, dur = CU.current(state.cursor)
         task = self.task(state, body, goal_left, targets)
         tally = scoring.update(state.tally, task.press, goal_left, task.picks if self.picks else None, task.wrong)
+        task_reward = task.reward
+        if self.picks and cfg.hold_reward:
+            task_reward = task_reward.at[-1].add(
+                cfg.hold_reward * jnp.sum(scoring.holds_completed(state.tally, tally, dur, targets)))
 
         cursor, note_end = CU.advance(state.cursor)
         info = self.empty_info()
@@ -325,7 +333,7 @@ class GuitarEnv:
 
         lifetime = state.lifetime + 1
         terminated = (task.terminate & (lifetime > cfg.grace_frames)) | nonfinite
-        reward = jnp.where(terminated, cfg.terminate_reward, task.reward)
+        reward = jnp.where(terminated, cfg.terminate_reward, task_reward)
         body = body.replace(tips=task.tips)
         return state.replace(body=body, cursor=cursor, picking=picking, tally=tally,
                              obs=jnp.where(nonfinite, 0.0, self.observe(body, cursor, picking)),

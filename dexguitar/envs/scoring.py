@@ -82,6 +82,17 @@ def update(tally: NoteTally, press, goal, picked=None, errors=None) -> NoteTally
                          press_at_pick=tally.press_at_pick | (first & state_ok))
 
 
+def holds_completed(before: NoteTally, after: NoteTally, frames, targets):
+    """bool (6,): strings whose both-hands verdict became right in this step (`update` took `before` to `after`):
+    a target picked once, cleanly, while pressed right, held so for 2/3 of its note's `frames` from the pick,
+    within the note or, for the previous note's open holds, into this one."""
+    need = (2 * frames + 2) // 3
+    within = (targets & (after.picks == 1) & ~after.errors & after.press_at_pick
+              & (after.held >= need) & (before.held < need))
+    across = (before.prev_need > 0) & (after.prev_need == 0) & after.prev_tp
+    return within | across
+
+
 def _prf(tp, predicted, targets):
     tp, predicted, targets = (jnp.sum(x.astype(jnp.float32)) for x in (tp, predicted, targets))
     precision = jnp.where(predicted > 0, tp / jnp.maximum(predicted, 1.0), 1.0)

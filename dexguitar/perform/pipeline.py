@@ -53,7 +53,7 @@ class Recipe:
 
     left_config: str = str(ROOT / "experiments" / "left_finetune.py")
     right_config: str = str(ROOT / "experiments" / "right_songs.py")
-    sync_config: str = str(ROOT / "experiments" / "sync_songs.py")
+    sync_config: str = str(ROOT / "experiments" / "sync_hold.py")
     left_init: str | None = str(ROOT / "models" / "policies" / "left_official15")
     right_init: str = str(ROOT / "models" / "policies" / "right_mixed")
     left_minutes: float = 3.0

@@ -17,7 +17,7 @@ group() {
     # A song already started (here or by another group) is left alone: its run and log stay as they are.
     [ -e /tmp/runs/gsync/$s ] && { echo "$s skipped: /tmp/runs/gsync/$s exists"; continue; }
     t0=$(date +%s)
-    dexguitar sync --song /tmp/official/$s.json --out /tmp/runs/gsync/$s --config experiments/sync_songs.py \
+    dexguitar sync --song /tmp/official/$s.json --out /tmp/runs/gsync/$s --config experiments/sync_hold.py \
       --max-minutes "${MIN:-2.5}" > /tmp/runs/gsync/$s.log 2>&1
     echo "$s rc=$? seconds=$(( $(date +%s) - t0 )) gpu=${CUDA_VISIBLE_DEVICES:-all}"
   done
