@@ -17,7 +17,7 @@ from dexguitar import envs
 from dexguitar.motion import feedforward as FF
 from dexguitar.music import load_songs
 from dexguitar.music import timeline as TL
-from dexguitar.perform.evaluate import note_scores
+from dexguitar.perform.evaluate import note_scores, rollout_song
 
 
 def song_f1(tab: str, version: int, stds, seeds: int) -> dict:
@@ -30,11 +30,8 @@ def song_f1(tab: str, version: int, stds, seeds: int) -> dict:
 
     @jax.jit
     def play(key, std):
-        def one(state, k):
-            nxt = env.step(state, std * jax.random.normal(k, (env.action_size,)))
-            info = jax.tree.map(lambda x: jnp.where(state.done, jnp.zeros_like(x), x), nxt.info)
-            return jax.tree.map(lambda a, b: jnp.where(state.done, a, b), state, nxt), (info, ~state.done)
-        return jax.lax.scan(one, env.reset(jax.random.PRNGKey(0), 0), jax.random.split(key, frames))[1]
+        return rollout_song(env, lambda obs, k: std * jax.random.normal(k, (env.action_size,)), 0, frames,
+                            xs=jax.random.split(key, frames))
 
     out = {}
     for std in stds:

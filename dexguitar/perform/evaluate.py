@@ -59,20 +59,21 @@ def rollout_notes(env, act, params, song_index, key, hands):
     return scores, ended
 
 
-def rollout_song(env, act, song_index: int, frames: int, key=None):
+def rollout_song(env, act, song_index: int, frames: int, key=None, xs=None):
     """Play song `song_index` of the env's batch from its start for `frames` steps, recording every step (for
-    videos); `act(obs) -> action`. Returns per-step info arrays (frames, ...) and the `alive` mask."""
+    videos); `act(obs) -> action`, or with per-step inputs `xs` (leading axis `frames`, e.g. noise keys)
+    `act(obs, x) -> action`. Returns per-step info arrays (frames, ...) and the `alive` mask."""
     key = jax.random.PRNGKey(0) if key is None else key
     state = env.reset(key, song_index)
 
-    def one(state, _):
-        nxt = env.step(state, act(state.obs))
+    def one(state, x):
+        nxt = env.step(state, act(state.obs) if xs is None else act(state.obs, x))
         alive = ~state.done
         info = jax.tree.map(lambda x: jnp.where(alive, x, jnp.zeros_like(x)), nxt.info)
         info["links"] = nxt.body.links
         info["qpos"] = nxt.body.data.qpos
         return jax.tree.map(lambda a, b: jnp.where(state.done, a, b), state, nxt), (info, alive)
-    _, (info, alive) = jax.lax.scan(one, state, None, length=frames)
+    _, (info, alive) = jax.lax.scan(one, state, xs, length=frames)
     return info, alive
 
 
