@@ -271,3 +271,27 @@ def test_version_11_shifts_the_hand_quickly_between_short_notes():
     assert held == {10: [1, 1, 1, 0, 1, 1], 11: [1] * len(line)}
     slow = Notes(goal, goal > 0, np.r_[0, 20 + 15 * np.arange(len(line) + 1)])
     np.testing.assert_array_equal(ScriptedLeft(11).desired(slow), ScriptedLeft(10).desired(slow))
+
+
+def test_version_12_bars_a_fret_with_the_index():
+    """Strings 1, 2 and 6 at fret 1 with string 3 at fret 2 (sonata_in_f_major_ms84_no14, notes 70-73), then two
+    notes that keep string 6 at fret 1. One finger per string cannot play the chord: on the tracked motion version 11
+    holds one of its four strings. Version 12 lays the index across all six strings at fret 1 in a hand pose of its
+    own, the middle finger on string 3, keeps the barre for the next two notes, and every string holds."""
+    from dexguitar.motion.planner import BARRE, BARRE_POSITIONS
+    chord = [1, 1, 2, 0, 0, 1]
+    goal = np.array([[0] * 6, chord, [0, 1, 0, 0, 0, 1], [0, 0, 2, 0, 0, 1], chord])
+    onset = np.array([0, 20, 50, 65, 80, 110])
+    notes = Notes(goal, goal > 0, onset)
+
+    def plan_and_held(version):
+        hand = ScriptedLeft(version=version)
+        press = tracked_presses(hand, notes)
+        return hand.fingering(notes)[1:], [strings_held(press, goal, onset, i) for i in range(1, 5)]
+    plan11, held11 = plan_and_held(11)
+    plan12, held12 = plan_and_held(12)
+    assert held11 == [1, 1, 2, 1]
+    barre = BARRE_POSITIONS + 1
+    assert plan12 == [(barre, {0: (BARRE, 1), 1: (2, 2)}), (barre, {0: (BARRE, 1)}),
+                      (barre, {0: (BARRE, 1), 1: (2, 2)}), (barre, {0: (BARRE, 1), 1: (2, 2)})]
+    assert held12 == [4, 2, 2, 4]

@@ -10,7 +10,8 @@ How it plays, per hand, before the rollout (`ScriptedPlayer.plan`):
 1. Keyframes in the guitar frame. Left hand: one-finger-per-fret hand positions covering 4 frets; each note's
    target strings get a fingertip on p_{i,k} resting on the fretboard, the other fingers hover 10 mm above the
    strings (version 2 on: where that fingering does not hold a note in a short simulated trial, the cheapest
-   other one that does; version 7 on: one finger across two neighbouring strings at one fret). Right hand: the
+   other one that does; version 7 on: one finger across two neighbouring strings at one fret; version 12 on: the
+   index barred across all six strings, in a hand pose of its own). Right hand: the
    pick sweeps from the gap before the first target string to the gap after the last, 3 mm below string height,
    choosing the stroke direction that starts where the last one ended (alternate picking on one string), and hovers
    6 mm above the strings in between.
@@ -338,14 +339,26 @@ POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fi
 # 9 and, where the rule's fingering with pairs does not hold, the cheapest other fingering with them that does;
 # 10 and the first move from the home pose ends by the first onset where that position is near home (`first_frames`);
 # 11 and a hand position change between notes shorter than 12 frames takes less than `shift_frames`, so that each note
-# beside it keeps 2/3 of itself (`shift_min`).
-LATEST = 11
+# beside it keeps 2/3 of itself (`shift_min`); 12 and a barre: where no fingering holds a note whose lowest fret
+# is pressed on two strings or more and no string is open, the index laid across all six strings at that fret in a
+# hand pose of its own, the other fingers on the higher frets (`ScriptedLeft.barre_fingering`), kept down over the
+# notes around it that it can play (`ScriptedLeft.extend_barres`).
+LATEST = 12
 PAIR = 10               # a finger pressing strings s and s + 1 (0-based) at one fret: "string" PAIR + s (version 7)
+BARRE = 20              # the index across all six strings at one fret: "string" BARRE (version 12)
+BARRE_POSITIONS = 100   # hand position BARRE_POSITIONS + k: the barre hand at fret k (`ScriptedLeft.barre_position`)
 
 
 def strings_of(s: int) -> tuple:
-    """The strings (0-based) under a finger's "string" s: one, or two for a pair (`PAIR`)."""
+    """The strings (0-based) under a finger's "string" s: one, two for a pair (`PAIR`), all six for a barre."""
+    if s == BARRE:
+        return tuple(range(N_STRINGS))
     return (s - PAIR, s - PAIR + 1) if s >= PAIR else (s,)
+
+
+def fret_of(p: int) -> int:
+    """The index finger's fret in hand position p (a barre position's fret)."""
+    return p - BARRE_POSITIONS if p > BARRE_POSITIONS else p
 
 
 class ScriptedLeft:
@@ -410,6 +423,9 @@ class ScriptedLeft:
         pressing string 1 and string 6 at its fret, so that every string is within reach from this pose."""
         if p in self._positions:
             return self._positions[p]
+        if p > BARRE_POSITIONS:
+            self._positions[p] = self.barre_position(p - BARRE_POSITIONS)
+            return self._positions[p]
         k, hand, g = self.kin, self.kin.hand, self.guitar
         if self.version >= 5:
             # from the neighbour towards the home pose's position, solved first (from the home pose itself at
@@ -445,6 +461,31 @@ class ScriptedLeft:
         sol = least_squares(residual, np.clip(z0, lo + 1e-6, hi - 1e-6), bounds=(lo, hi), ftol=1e-6, xtol=1e-6)
         self._positions[p] = sol.x[:27]
         return self._positions[p]
+
+    def barre_position(self, fret: int) -> np.ndarray:
+        """27 joint values of the barre hand at `fret` (version 12): the index's axis through every string's point
+        in the middle of the fret space, at the height of a pressing fingertip's axis, the other fingertips hovering
+        over the next three frets and the thumb behind the neck; wrist free, from hand position `fret`."""
+        k, hand, g = self.kin, self.kin.hand, self.guitar
+        y = self.fret_mid(fret)
+        z = g.fretboard_z + H.RADII["index"][1] - self.press_depth
+        points = np.array([[g.string_x(i + 1, y), y, z] for i in range(N_STRINGS)])
+        frets = [min(fret + f, g.n_frets) for f in range(4)]
+
+        def residual(q):
+            k.set(q)
+            seg = k.segments()[:3]
+            d2 = np.stack([point_segment_distance(points, a, b)[0] for a, b in seg])    # (3 segments, 6 strings)
+            out = [30 * np.sqrt(d2.min(axis=0) + 1e-12)]
+            out += [10 * (k.site(hand.tips[f]) - self.hover_point(self.mid_x(frets[f]), frets[f])) for f in (1, 2, 3)]
+            out.append(10 * (k.site(hand.thumb_tip) - [-0.008 * g.sign, self.fret_mid(frets[1]) + 0.01, -0.02]))
+            out.append(0.01 * (q[6:] - self.posture))
+            return np.concatenate(out)
+
+        q0 = self.position(fret)
+        sol = least_squares(residual, np.clip(q0, k.lo + 1e-6, k.hi - 1e-6), bounds=(k.lo, k.hi), ftol=1e-8,
+                            xtol=1e-8)
+        return sol.x
 
     def finger(self, f: int, p: int, target: tuple, pressing: bool, string: int = -1) -> np.ndarray:
         """4 joint values of finger f (0 = index) in position p putting its tip on `target` (rounded to 0.1 mm).
@@ -482,15 +523,22 @@ class ScriptedLeft:
         """Per note: (hand position, {finger: (string, fret)}). One finger per fret; the position moves only when a
         note leaves it, by the least amount. Chords: fingers by fret (index on the lowest), at one fret the string
         nearer string 6 first; more than 4 pressed strings keep the 4 lowest frets. Later versions search where that
-        does not hold (2, 5), avoid hurried jumps (6), press neighbouring strings at one fret with one finger (7, 9)
-        and plan the positions for the whole song (8)."""
-        p, out = None, []
+        does not hold (2, 5), avoid hurried jumps (6), press neighbouring strings at one fret with one finger (7, 9),
+        plan the positions for the whole song (8) and bar a fret with the index (12)."""
+        return self.plans(notes)[0]
+
+    def plans(self, notes: Notes):
+        """(`fingering`, the same without barres): an idle finger hovers over where it presses next in its hand
+        position as if no note were barred (`configs`). With barres taken into account the idle fingers of
+        `sonata`'s notes 41-51 hovered elsewhere, one of them settled on the strings, and 10 notes were lost."""
+        p, out, ahead = None, [], []
         planned = self.positions(notes) if self.version >= 8 else [None] * notes.n
         for i in range(notes.n):
             goal = notes.left[i]
             press = sorted(((int(goal[s]), -s) for s in range(N_STRINGS) if goal[s] > 0))[:4]
             if not press:
                 out.append((p, {}))
+                ahead.append((p, {}))
                 continue
             before = next(((q, f) for q, f in reversed(out) if q is not None), None)
             if self.version >= 7:
@@ -498,21 +546,27 @@ class ScriptedLeft:
                 if paired is not None:
                     p = paired[0]
                     out.append(paired)
+                    ahead.append(paired)
                     continue
             p, fingers = self.rule(press, p, planned[i])
             if self.version >= 6 and len(press) == 1 and self.hurried(notes, i) and self.jumps(before, p, fingers):
                 p, fingers = self.search_steady(p, fingers, press, goal, before)
             if self.version >= 2 and not self.holds(p, fingers, goal, before):
                 p, fingers = self.search_fingering(p, fingers, press, goal, before)
-                if self.version >= 5 and not self.holds(p, fingers, goal, before):
+                barre = None
+                if self.version >= 12 and not self.holds(p, fingers, goal, before):
+                    barre = self.barre_fingering(goal, before)
+                if self.version >= 5 and not self.holds(p, fingers, goal, before):     # also for `ahead` under a barre
                     p, fingers = self.search_partial(p, fingers, goal, before)
+                if barre is not None:
+                    out.append(barre)
+                    ahead.append((p, fingers))
+                    continue
             out.append((p, fingers))
-        first = next((q for q, _ in out if q is not None), 1)
-        filled, last = [], first
-        for q, fingers in out:
-            last = q if q is not None else last
-            filled.append((last, fingers))
-        return filled
+            ahead.append((p, fingers))
+        if self.version >= 12:
+            self.extend_barres(notes, out)
+        return _filled(out), _filled(ahead)
 
     def rule(self, press: list, p: int | None, planned: int | None = None):
         """The one-finger-per-fret rule for the pressed (fret, -string) of `press` (fret order, at most 4), coming
@@ -603,12 +657,15 @@ class ScriptedLeft:
                 s, k = fingers[f]
                 q[FINGER_DOFS[f]] = self.pressing(f, p, s, k)
             else:
-                k = min(p + f, g.n_frets)
+                k = min(fret_of(p) + f, g.n_frets)
                 q[FINGER_DOFS[f]] = self.finger(f, p, _key(self.hover_point(self.mid_x(k), k)), False)
         return q
 
     def pressing(self, f: int, p: int, s: int, k: int) -> np.ndarray:
-        """4 joint values of finger f in position p pressing string s (0-based) at fret k."""
+        """4 joint values of finger f in position p pressing string s (0-based) at fret k (a barre: the barre
+        position's own index)."""
+        if s == BARRE:
+            return self.position(p)[FINGER_DOFS[f]]
         return self.finger(f, p, _key(self.press_point(s, k, f)), True, s)
 
     def holds(self, p: int, fingers: dict, goal, before=None) -> bool:
@@ -641,6 +698,45 @@ class ScriptedLeft:
             self.kin.set(qs[-1])
             self._trials[key] = _pressed(self.kin.segments())
         return self._trials[key]
+
+    def barre_fingering(self, goal, before: tuple | None, low: int | None = None):
+        """Version 12: the index barred across all six strings at fret `low` (default: the note's lowest, pressed
+        on two strings or more; `barre_position`), the higher frets by the rule with the other three fingers, if
+        that holds the note (`holds`); else None. Never where a string must ring open (the barre would stop it)."""
+        goal = np.asarray(goal)
+        if np.any(goal == -1) or (low is None and not np.any(goal > 0)):
+            return None
+        if low is None:
+            low = int(goal[goal > 0].min())
+            if np.sum(goal == low) < 2:
+                return None
+        rest = sorted((int(goal[s]), -s) for s in range(N_STRINGS) if goal[s] > low)
+        if np.any((goal > 0) & (goal < low)) or len(rest) > 3 or (rest and rest[-1][0] > low + 3):
+            return None
+        fingers, f_prev = {0: (BARRE, low)}, 0
+        for j, (k, ms) in enumerate(rest):
+            f = max(f_prev + 1, min(k - low, 3 - (len(rest) - 1 - j)))
+            fingers[f] = (-ms, k)
+            f_prev = f
+        p = BARRE_POSITIONS + low
+        return (p, fingers) if self.holds(p, fingers, goal, before) else None
+
+    def extend_barres(self, notes: Notes, out: list) -> None:
+        """Version 12: a barre stays for the notes around it that it can play (no open string, every pressed fret
+        within the barre's four; `barre_fingering` at its fret holds them), as a guitarist keeps a barre down over
+        a passage instead of moving the whole hand out of it and back for a note or two (in `out`, in place)."""
+        barres = [i for i, (p, _) in enumerate(out) if p is not None and p > BARRE_POSITIONS]
+        for i in barres:
+            low = fret_of(out[i][0])
+            for step in (1, -1):
+                j = i + step
+                while 0 <= j < notes.n and not (out[j][0] is not None and out[j][0] == out[i][0]):
+                    before = next(((q, f) for q, f in reversed(out[:j]) if q is not None), None)
+                    barre = self.barre_fingering(notes.left[j], before, low) if np.any(notes.left[j] > 0) else None
+                    if barre is None:
+                        break
+                    out[j] = barre
+                    j += step
 
     def search_partial(self, p0: int, fingers0: dict, goal, before: tuple | None):
         """Where no fingering holds the whole note (version 5; `search_fingering` found none): of the cheapest
@@ -711,9 +807,11 @@ class ScriptedLeft:
                 return p, fingers
         return None
 
-    def configs(self, notes: Notes, plan):
+    def configs(self, notes: Notes, plan, ahead=None):
         """Per note: the 27 joint values (wrist and thumb of its position, each finger pressing or hovering over the
-        next place it presses) and, per finger, a via configuration for a same-finger move (or None)."""
+        next place it presses in `ahead`, default `plan`) and, per finger, a via configuration for a same-finger move
+        (or None)."""
+        ahead = plan if ahead is None else ahead
         g = self.guitar
         out = []
         for i, (p, fingers) in enumerate(plan):
@@ -723,15 +821,17 @@ class ScriptedLeft:
                 if f in fingers:
                     s, k = fingers[f]
                     q[FINGER_DOFS[f]] = self.pressing(f, p, s, k)
-                    if i > 0 and f in plan[i - 1][1] and plan[i - 1][1][f] != (s, k) and plan[i - 1][0] == p:
+                    if (i > 0 and f in plan[i - 1][1] and plan[i - 1][1][f] != (s, k) and plan[i - 1][0] == p
+                            and BARRE not in (s, plan[i - 1][1][f][0])):
                         via = self.hover_point(float(self.press_point(s, k, f)[0]), k)
                         via[2] = g.string_z + 0.007
                         vias[f] = self.finger(f, p, _key(via), False)
                     continue
-                nxt = next(((plan[j][1][f]) for j in range(i + 1, len(plan))
-                            if plan[j][0] == p and f in plan[j][1]), None)
+                nxt = next(((ahead[j][1][f]) for j in range(i + 1, len(plan))
+                            if ahead[j][0] == p and f in ahead[j][1]), None)
                 if nxt is None:
-                    target = self.hover_point(self.mid_x(min(p + f, g.n_frets)), min(p + f, g.n_frets))
+                    hk = min(fret_of(p) + f, g.n_frets)
+                    target = self.hover_point(self.mid_x(hk), hk)
                 else:
                     target = self.hover_point(float(self.press_point(*nxt, f)[0]), nxt[1])
                 q[FINGER_DOFS[f]] = self.finger(f, p, _key(target), False)
@@ -744,8 +844,8 @@ class ScriptedLeft:
         `lead_frames` earlier): a press that cannot spoil the previous note lands early, one that can lands right
         after tb; a lift that cannot spoil the next note waits, one that can is released before tb; hand position
         changes are centred on tb."""
-        plan = self.fingering(notes)
-        cfg = self.configs(notes, plan)
+        plan, ahead = self.plans(notes)
+        cfg = self.configs(notes, plan, ahead)
         T = notes.frames
         groups = [WRIST_THUMB] + FINGER_DOFS
         events = [[] for _ in groups]                    # per group: (t0, t1, q_to, via)
@@ -755,7 +855,7 @@ class ScriptedLeft:
             tb = notes.onset[i] + 0.5
             if i == 0:
                 start = self.start_frames
-                if self.version >= 10 and abs(plan[0][0] - HOME_POSITION) <= self.first_reach:
+                if self.version >= 10 and abs(fret_of(plan[0][0]) - HOME_POSITION) <= self.first_reach:
                     first = next((j for j in range(notes.n) if np.any(notes.left[j] != 0)), 0)
                     start = min(start, max(self.first_frames, int(notes.onset[first])))   # a song that starts at once
                 for gi, dofs in enumerate(groups):
@@ -775,7 +875,7 @@ class ScriptedLeft:
                 for gi, dofs in enumerate(groups):
                     events[gi].append((tb - w / 2, tb + w / 2, q[dofs], None))
                 for f in set(f_a) & set(f_b):                  # same finger, same string: slide along it
-                    if f_a[f][0] == f_b[f][0]:
+                    if f_a[f][0] == f_b[f][0] != BARRE:
                         slides.append((tb - w / 2, tb + w / 2, f, f_b[f][0], f_a[f][1], f_b[f][1]))
                 continue
             lift, land = self.lift_frames, self.land_frames
@@ -859,6 +959,17 @@ def _pressed(segments) -> np.ndarray:
 def _spare(n: int) -> int:
     """Frames of an n-frame note beyond the 2/3 of it that must be held (`scoring.close`)."""
     return n - (2 * n + 2) // 3
+
+
+def _filled(plan: list) -> list:
+    """A plan with the hand position of each note that presses nothing (None) taken from the note before (the first
+    notes': from the first that presses)."""
+    last = next((q for q, _ in plan if q is not None), 1)
+    out = []
+    for q, fingers in plan:
+        last = q if q is not None else last
+        out.append((last, fingers))
+    return out
 
 
 def _harmless(goal, s: int, k: int) -> bool:
