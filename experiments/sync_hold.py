@@ -2,7 +2,7 @@
 pick column for each string whose rule-(3) hold completes (picked cleanly while pressed right, then kept pressed for
 2/3 of its note from the pick). Without it nothing in the reward asks the hands for that hold, which the paper's
 both-hands F1 judges: of the 19 notes that `gsync_spring_overture` loses, 17 are right for each hand alone and lost
-to the hold (a three-string strum that ends on its fretted string at frame 3 of a 6-frame note)."""
+to the hold, 13 of them a three-string strum that reaches its fretted string at frame 3 of a 6-frame note."""
 import dataclasses
 import os
 import runpy

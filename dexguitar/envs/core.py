@@ -314,7 +314,7 @@ class GuitarEnv:
         task = self.task(state, body, goal_left, targets)
         tally = scoring.update(state.tally, task.press, goal_left, task.picks if self.picks else None, task.wrong)
         task_reward = task.reward
-        if self.picks and cfg.hold_reward:
+        if cfg.hold_reward and self.picks and "left" in self.roles:      # the duet: both hands judged together
             task_reward = task_reward.at[-1].add(
                 cfg.hold_reward * jnp.sum(scoring.holds_completed(state.tally, tally, dur, targets)))
 
