@@ -582,12 +582,7 @@ class ScriptedLeft:
         elif hi > p + 3:
             p = hi - 3 if hi - lo <= 3 else lo
         p = min(p, self.guitar.n_frets - 3)
-        fingers, f_prev = {}, -1
-        for j, (k, ms) in enumerate(press):
-            f = max(f_prev + 1, min(k - p, 3 - (len(press) - 1 - j)))
-            fingers[f] = (-ms, k)
-            f_prev = f
-        return p, fingers
+        return p, _by_fret(press, p)
 
     def positions(self, notes: Notes) -> list:
         """Version 8: the hand position of each note (None: nothing pressed) for the whole song at once, by dynamic
@@ -713,11 +708,7 @@ class ScriptedLeft:
         rest = sorted((int(goal[s]), -s) for s in range(N_STRINGS) if goal[s] > low)
         if np.any((goal > 0) & (goal < low)) or len(rest) > 3 or (rest and rest[-1][0] > low + 3):
             return None
-        fingers, f_prev = {0: (BARRE, low)}, 0
-        for j, (k, ms) in enumerate(rest):
-            f = max(f_prev + 1, min(k - low, 3 - (len(rest) - 1 - j)))
-            fingers[f] = (-ms, k)
-            f_prev = f
+        fingers = {0: (BARRE, low)} | _by_fret(rest, low, first=1)
         p = BARRE_POSITIONS + low
         return (p, fingers) if self.holds(p, fingers, goal, before) else None
 
@@ -959,6 +950,17 @@ def _pressed(segments) -> np.ndarray:
 def _spare(n: int) -> int:
     """Frames of an n-frame note beyond the 2/3 of it that must be held (`scoring.close`)."""
     return n - (2 * n + 2) // 3
+
+
+def _by_fret(press: list, p: int, first: int = 0) -> dict:
+    """{finger: (string, fret)} for the pressed (fret, -string) of `press` (fret order) in position p: each on the
+    finger of its fret where it can be, fingers `first`..3 in fret order, leaving one finger for each later note."""
+    fingers, f_prev = {}, first - 1
+    for j, (k, ms) in enumerate(press):
+        f = max(f_prev + 1, min(k - p, 3 - (len(press) - 1 - j)))
+        fingers[f] = (-ms, k)
+        f_prev = f
+    return fingers
 
 
 def _filled(plan: list) -> list:
