@@ -1,6 +1,8 @@
 """The left hand as a residual on the planner (`EnvConfig(feedforward=FF.LATEST)`, `motion/feedforward.py`): a zero residual
 must play exactly as the scripted player does, and a training window must start in its planned state and read the
 plan frame by frame, or the feedforward belongs to other notes than the ones being played."""
+import os
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -88,6 +90,16 @@ def test_plans_come_from_the_disk_cache_the_second_time(plans, tmp_path, monkeyp
     np.testing.assert_array_equal(np.asarray(first.plan.action), np.asarray(again.plan.action))
     assert first.plan.action.shape[1] >= FF.MIN_FRAMES and int(first.plan.frames[0]) > 0
     assert np.all(np.abs(np.asarray(first.plan.action)) <= 1.0)
+
+
+def test_plans_are_made_with_one_blas_thread_even_for_one_song(monkeypatch):
+    """A plan depends on the BLAS thread count, so planning never runs in the calling process (whose BLAS keeps the
+    threads it started with): even a single job goes to a worker started with one thread."""
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "2")
+    monkeypatch.setenv("OMP_NUM_THREADS", "2")
+    out, used = FF.in_processes(os.getenv, ["OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"], workers=1)
+    assert out == ["1", "1"] and used == 1
+    assert os.environ["OPENBLAS_NUM_THREADS"] == "2"                         # the caller's own setting is back
 
 
 def test_the_residual_flag_travels_with_the_policy():

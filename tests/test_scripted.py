@@ -295,3 +295,26 @@ def test_version_12_bars_a_fret_with_the_index():
     assert plan12 == [(barre, {0: (BARRE, 1), 1: (2, 2)}), (barre, {0: (BARRE, 1)}),
                       (barre, {0: (BARRE, 1), 1: (2, 2)}), (barre, {0: (BARRE, 1), 1: (2, 2)})]
     assert held12 == [4, 2, 2, 4]
+
+
+def test_version_13_keeps_a_chord_down_over_its_partial_strum():
+    """snow, notes 47-51: the chord 7 9 9 8 7 7 (strings 6..1) twice, then only its strings 6-4 twice, then the
+    next chord. Version 12 fingers the partial strum afresh in the same hand position (index to string 6, ring to
+    strings 5-4): every finger lifts and lands again at the boundary, and the tracked motion holds 3 of the last
+    chord's 6 strings and 2 of the partial's 3. Version 13 keeps the chord's fingering, which already plays the
+    partial strum: 6 and 3. The next chord starts from the whole chord, not from two fingers, and holds 3 of its 4
+    strings instead of 4 (snow loses that note too)."""
+    chord = [7, 7, 8, 9, 9, 7]                                   # strings 1..6
+    part = [0, 0, 0, 9, 9, 7]
+    goal = np.array([[0] * 6, chord, chord, part, part, [0, 11, 11, 11, 9, 0]])
+    onset = np.array([0, 20, 29, 38, 47, 56, 65])
+    notes = Notes(goal, goal > 0, onset)
+
+    def plan_and_held(version):
+        hand = ScriptedLeft(version=version)
+        press = tracked_presses(hand, notes)
+        return hand.fingering(notes)[1:], [strings_held(press, goal, onset, i) for i in range(1, 6)]
+    plan12, held12 = plan_and_held(12)
+    plan13, held13 = plan_and_held(13)
+    assert plan12[2] != plan12[1] and held12 == [6, 3, 2, 3, 4]
+    assert plan13[0] == plan13[1] == plan13[2] == plan13[3] and held13 == [6, 6, 3, 3, 3]

@@ -73,10 +73,11 @@ def plan_notes(job) -> tuple[np.ndarray, np.ndarray]:
 
 def in_processes(fn, jobs, workers: int = 0) -> tuple[list, int]:
     """([fn(job) for job in jobs], processes used): on `workers` processes (0: one per CPU) with one BLAS thread
-    each (16 processes of 16 threads each ran at a load of 150 on 16 cores). `fn` must be a module-level function."""
+    each, never in this process, even for one job. A plan depends on the BLAS thread count: the 15 official songs
+    planned with 2 threads and with 1 differed in every song, 11 of them by more than 0.04 of a half range in some
+    action (`snow` 0.76). With one thread everywhere a plan is the same on a laptop, in CI and on a 16-core GPU host
+    (where 16 processes of 16 threads each had also run at a load of 150). `fn` must be a module-level function."""
     workers = max(1, min(workers or os.cpu_count() or 1, len(jobs)))
-    if workers == 1:
-        return [fn(j) for j in jobs], 1
     ctx = multiprocessing.get_context("spawn")          # the parent runs JAX threads: never fork it
     saved = {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
                                              "JAX_PLATFORMS")}

@@ -342,8 +342,9 @@ POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fi
 # beside it keeps 2/3 of itself (`shift_min`); 12 and a barre: where no fingering holds a note whose lowest fret
 # is pressed on two strings or more and no string is open, the index laid across all six strings at that fret in a
 # hand pose of its own, the other fingers on the higher frets (`ScriptedLeft.barre_fingering`), kept down over the
-# notes around it that it can play (`ScriptedLeft.extend_barres`).
-LATEST = 12
+# notes around it that it can play (`ScriptedLeft.extend_barres`); 13 and a note that the fingering of the note
+# before already plays keeps it (`ScriptedLeft.kept`), as a guitarist keeps a chord down over its partial strums.
+LATEST = 13
 PAIR = 10               # a finger pressing strings s and s + 1 (0-based) at one fret: "string" PAIR + s (version 7)
 BARRE = 20              # the index across all six strings at one fret: "string" BARRE (version 12)
 BARRE_POSITIONS = 100   # hand position BARRE_POSITIONS + k: the barre hand at fret k (`ScriptedLeft.barre_position`)
@@ -524,7 +525,8 @@ class ScriptedLeft:
         note leaves it, by the least amount. Chords: fingers by fret (index on the lowest), at one fret the string
         nearer string 6 first; more than 4 pressed strings keep the 4 lowest frets. Later versions search where that
         does not hold (2, 5), avoid hurried jumps (6), press neighbouring strings at one fret with one finger (7, 9),
-        plan the positions for the whole song (8) and bar a fret with the index (12)."""
+        plan the positions for the whole song (8), bar a fret with the index (12) and keep a fingering over the notes
+        it already plays (13)."""
         return self.plans(notes)[0]
 
     def plans(self, notes: Notes):
@@ -541,6 +543,12 @@ class ScriptedLeft:
                 ahead.append((p, {}))
                 continue
             before = next(((q, f) for q, f in reversed(out) if q is not None), None)
+            kept = self.kept(goal, before) if self.version >= 13 else None
+            if kept is not None:
+                p = kept[0]
+                out.append(kept)
+                ahead.append(kept)
+                continue
             if self.version >= 7:
                 paired = self.pair_fingering(goal, p, before, planned[i])
                 if paired is not None:
@@ -567,6 +575,16 @@ class ScriptedLeft:
         if self.version >= 12:
             self.extend_barres(notes, out)
         return _filled(out), _filled(ahead)
+
+    def kept(self, goal, before: tuple | None):
+        """Version 13: the fingering of the note before (`before`: position, fingers) where it plays this note too
+        (`covers`, `holds`); else None. A partial strum of a chord then keeps the whole chord down, as a guitarist
+        does, where the fingering searched for the note alone regrips (`snow`'s "7 9 9 x x x" after its
+        "7 9 9 8 7 7": every finger lifted and landed again, both notes lost). Keeping only the fingers that press
+        the note, the others lifted to hover ahead, played 4 of the 15 official songs worse than keeping them all."""
+        if before is None or before[0] >= BARRE_POSITIONS or not before[1] or not covers(before[1], goal):
+            return None
+        return before if self.holds(*before, goal, before) else None
 
     def rule(self, press: list, p: int | None, planned: int | None = None):
         """The one-finger-per-fret rule for the pressed (fret, -string) of `press` (fret order, at most 4), coming
@@ -972,6 +990,17 @@ def _filled(plan: list) -> list:
         last = q if q is not None else last
         out.append((last, fingers))
     return out
+
+
+def covers(fingers: dict, goal) -> bool:
+    """Does this fingering play the left goal as the env detects it: each string pressed at its fret k > 0 (by a
+    finger there and none higher up), no open string (-1) pressed; free strings (0) may be pressed (version 13)."""
+    top = np.zeros(N_STRINGS, int)
+    for s, k in fingers.values():
+        for j in strings_of(s):
+            top[j] = max(top[j], k)
+    goal = np.asarray(goal)
+    return bool(np.all(np.where(goal > 0, top == goal, np.where(goal < 0, top == 0, True))))
 
 
 def _harmless(goal, s: int, k: int) -> bool:
