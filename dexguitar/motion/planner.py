@@ -581,7 +581,8 @@ class ScriptedLeft:
         (`covers`, `holds`); else None. A partial strum of a chord then keeps the whole chord down, as a guitarist
         does, where the fingering searched for the note alone regrips (`snow`'s "7 9 9 x x x" after its
         "7 9 9 8 7 7": every finger lifted and landed again, both notes lost). Keeping only the fingers that press
-        the note, the others lifted to hover ahead, played 4 of the 15 official songs worse than keeping them all."""
+        the note, the others lifted to hover ahead, played 3 of the 15 official songs worse than keeping them all and
+        none better."""
         if before is None or before[0] >= BARRE_POSITIONS or not before[1] or not covers(before[1], goal):
             return None
         return before if self.holds(*before, goal, before) else None
