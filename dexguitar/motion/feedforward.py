@@ -118,10 +118,9 @@ def song_notes(songs, i: int, rest_frames: int):
     return Notes(left, pick, np.concatenate([[0], onset]))
 
 
-def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, log=None, version: int = LATEST):
-    """The song batch (`timeline.batch`/`stack`) with a `Plan` per song by the planner of `version`; empty songs get
-    a plan of the home pose. Plans come from the disk cache where they were made before."""
-    from dexguitar.music.timeline import capacity
+def plan_songs(songs, rest_frames: int = 5, workers: int = 0, log=None, version: int = LATEST):
+    """(keys, {key: (action, qpos)}): the plan of each song of a batch by the planner of `version` (key None: an
+    empty song), from the disk cache where it was made before, else made now (all in one pool) and cached."""
     S = int(np.shape(songs.n_notes)[0])
     notes = [song_notes(songs, i, rest_frames) if int(songs.n_notes[i]) > 0 else None for i in range(S)]
     keys = [_job_key(n.left, n.onset, version) if n is not None else None for n in notes]
@@ -142,6 +141,14 @@ def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, 
             tmp = cache / f"{k}.tmp.npz"
             np.savez(tmp, action=a, qpos=q)
             tmp.replace(cache / f"{k}.npz")
+    return keys, found
+
+
+def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, log=None, version: int = LATEST):
+    """The song batch (`timeline.batch`/`stack`) with a `Plan` per song by the planner of `version` (`plan_songs`);
+    empty songs get a plan of the home pose."""
+    from dexguitar.music.timeline import capacity
+    keys, found = plan_songs(songs, rest_frames, workers, log, version)
     F = capacity(max((len(found[k][0]) for k in found), default=1), MIN_FRAMES)
     flip = H.mirror_qpos(np.ones(H.N_DOF), "left") if mirror else np.ones(H.N_DOF, np.float32)
     act, qpos, qvel, frames = [], [], [], []

@@ -178,7 +178,7 @@ def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str |
     size = CPU_DUET_SONGS if hand == "duet" and jax.default_backend() == "cpu" else max(len(songs), 1)
     timelines = [TL.from_song(s) for s in songs]
     if cfg.feedforward and size < len(songs):       # plan every song in one pool; the chunks read the plans' disk cache
-        FF.prepare(TL.batch(timelines), cfg)
+        FF.plan_songs(TL.batch(timelines), cfg.rest_frames, version=int(cfg.feedforward))
     results = {}
     for start in range(0, len(songs), size):
         part = songs[start:start + size]
