@@ -83,6 +83,14 @@ def strings_held(press, goal, onset, i: int) -> int:
     return int(np.sum(ok[goal[i] > 0]))
 
 
+def fingering_and_held(version: int, notes):
+    """A planner version's fingering of `notes` after the opening rest, and per note how many of its pressed strings
+    the tracked motion holds for 2/3 of it (`strings_held`)."""
+    hand = ScriptedLeft(version=version)
+    press = tracked_presses(hand, notes)
+    return hand.fingering(notes)[1:], [strings_held(press, notes.left, notes.onset, i) for i in range(1, notes.n)]
+
+
 def test_a_chord_the_rule_cannot_hold_gets_a_searched_fingering():
     """Strings 3 and 4 at fret 2 right after a note at fret 1 (come_as_you_are, note 51): the one-finger-per-fret
     rule keeps position 1 and sends the ring finger back from its own fret 3, where the middle finger is in its way;
@@ -283,13 +291,8 @@ def test_version_12_bars_a_fret_with_the_index():
     goal = np.array([[0] * 6, chord, [0, 1, 0, 0, 0, 1], [0, 0, 2, 0, 0, 1], chord])
     onset = np.array([0, 20, 50, 65, 80, 110])
     notes = Notes(goal, goal > 0, onset)
-
-    def plan_and_held(version):
-        hand = ScriptedLeft(version=version)
-        press = tracked_presses(hand, notes)
-        return hand.fingering(notes)[1:], [strings_held(press, goal, onset, i) for i in range(1, 5)]
-    plan11, held11 = plan_and_held(11)
-    plan12, held12 = plan_and_held(12)
+    plan11, held11 = fingering_and_held(11, notes)
+    plan12, held12 = fingering_and_held(12, notes)
     assert held11 == [1, 1, 2, 1]
     barre = BARRE_POSITIONS + 1
     assert plan12 == [(barre, {0: (BARRE, 1), 1: (2, 2)}), (barre, {0: (BARRE, 1)}),
@@ -309,12 +312,7 @@ def test_version_13_keeps_a_chord_down_over_its_partial_strum():
     goal = np.array([[0] * 6, chord, chord, part, part, [0, 11, 11, 11, 9, 0]])
     onset = np.array([0, 20, 29, 38, 47, 56, 65])
     notes = Notes(goal, goal > 0, onset)
-
-    def plan_and_held(version):
-        hand = ScriptedLeft(version=version)
-        press = tracked_presses(hand, notes)
-        return hand.fingering(notes)[1:], [strings_held(press, goal, onset, i) for i in range(1, 6)]
-    plan12, held12 = plan_and_held(12)
-    plan13, held13 = plan_and_held(13)
+    plan12, held12 = fingering_and_held(12, notes)
+    plan13, held13 = fingering_and_held(13, notes)
     assert plan12[2] != plan12[1] and held12 == [6, 3, 2, 3, 4]
     assert plan13[0] == plan13[1] == plan13[2] == plan13[3] and held13 == [6, 6, 3, 3, 3]

@@ -1000,8 +1000,7 @@ def covers(fingers: dict, goal) -> bool:
     for s, k in fingers.values():
         for j in strings_of(s):
             top[j] = max(top[j], k)
-    goal = np.asarray(goal)
-    return bool(np.all(np.where(goal > 0, top == goal, np.where(goal < 0, top == 0, True))))
+    return bool(np.all(scoring.left_ok(top, np.asarray(goal))))
 
 
 def _harmless(goal, s: int, k: int) -> bool:
