@@ -1,7 +1,6 @@
-"""Left F1 of a left hand on held-out procedural songs of the general material (a seed that training never uses),
-16 songs at a time: what a planner version or a trained general hand is judged by beside the official songs.
-`dexguitar eval --procedural 48` stalled on a 2-core CPU in the twentieth session (no CPU used after planning); 16 at
-a time it runs in about 40 s a chunk once planned.
+"""Left F1 of a left hand on held-out procedural songs of the general material (a seed that training never uses): what
+a planner version or a trained general hand is judged by beside the official songs. On a CPU `evaluate` plays them 16
+at a time (`perform.evaluate.CPU_HAND_SONGS`), about 40 s a chunk once planned.
 
     JAX_PLATFORMS=cpu .venv/bin/python experiments/heldout_left.py models/policies/left_general out.json --seed 2 --songs 48
 """
@@ -23,8 +22,6 @@ if __name__ == "__main__":
     params, meta = PO.load(args.ckpt)
     spec = PO.PolicySpec.from_meta(meta)
     songs = procedural.material("left", "general", args.seed, args.songs)
-    out = {}
-    for i in range(0, len(songs), 16):
-        out.update({k: v["summary"] for k, v in evaluate(params, spec, songs[i:i + 16]).items()})
+    out = {k: v["summary"] for k, v in evaluate(params, spec, songs).items()}
     json.dump(out, open(args.out, "w"), indent=1)
     print(f"{len(out)} songs, mean left F1 {statistics.mean(v['left']['f1'] for v in out.values()):.4f}")

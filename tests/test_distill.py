@@ -8,7 +8,7 @@ from dexguitar import envs
 from dexguitar.cli import main
 from dexguitar.learn import distill as D
 from dexguitar.learn import policy as PO
-from dexguitar.motion.planner import ScriptedPlayer
+from dexguitar.perform.scripted import ScriptedPlayer
 from dexguitar.music import timeline as TL
 from test_scripted import MELODY, melody
 

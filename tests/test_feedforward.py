@@ -11,7 +11,7 @@ import pytest
 from dexguitar import envs
 from dexguitar.learn import policy as PO
 from dexguitar.motion import feedforward as FF
-from dexguitar.motion.planner import ScriptedPlayer
+from dexguitar.perform.scripted import ScriptedPlayer
 from dexguitar.music import cursor as CU
 from dexguitar.music import timeline as TL
 from dexguitar.perform.evaluate import evaluate

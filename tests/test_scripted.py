@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from dexguitar import envs
-from dexguitar.motion.planner import Notes, ScriptedLeft, ScriptedPlayer, ScriptedRight
+from dexguitar.motion.planner import Notes, ScriptedLeft, ScriptedRight
+from dexguitar.perform.scripted import ScriptedPlayer
 from dexguitar.music import timeline as TL
 from dexguitar.music.song import Song, make_note
 
@@ -316,3 +317,59 @@ def test_version_13_keeps_a_chord_down_over_its_partial_strum():
     plan13, held13 = fingering_and_held(13, notes)
     assert plan12[2] != plan12[1] and held12 == [6, 3, 2, 3, 4]
     assert plan13[0] == plan13[1] == plan13[2] == plan13[3] and held13 == [6, 6, 3, 3, 3]
+
+
+def test_version_14_glides_along_a_fast_chromatic_run():
+    """Frets 1 to 9 on string 1 in 5-frame notes (flight_of_the_bumblebee1's run, notes 194-209, goes on to fret 17).
+    Version 13 plans as few moves as cover the line: frets 1-4 in position 1, then a 4-fret jump to position 5, which
+    the wrist (kp 10 on 0.2 kg) cannot make in the frame of slack a 5-frame note has; the tracked motion loses the
+    three notes around the jump. Version 14 makes a move between two such short notes cost per fret beyond one: the
+    little finger stays on the string and slides one fret a note while the hand follows, and every note holds.
+    Notes of 9 frames plan exactly as before."""
+    line = list(range(1, 10))
+    goal = np.array([[0] * 6] + [[k, 0, 0, 0, 0, 0] for k in line])
+    onset = np.r_[0, 20 + 5 * np.arange(len(line) + 1)]
+    notes = Notes(goal, goal > 0, onset)
+    plan13, held13 = fingering_and_held(13, notes)
+    plan14, held14 = fingering_and_held(14, notes)
+    assert [p for p, _ in plan13] == [1, 1, 1, 1, 5, 5, 5, 5, 6] and held13 == [1, 1, 1, 0, 0, 0, 1, 1, 1]
+    assert plan14 == [(1, {0: (0, 1)}), (1, {1: (0, 2)}), (1, {2: (0, 3)})] + [(k - 3, {3: (0, k)}) for k in line[3:]]
+    assert held14 == [1] * len(line)
+    slow = Notes(goal, goal > 0, np.r_[0, 20 + 9 * np.arange(len(line) + 1)])
+    np.testing.assert_array_equal(ScriptedLeft(14).desired(slow), ScriptedLeft(13).desired(slow))
+
+
+def test_version_15_takes_a_shift_from_the_note_that_can_spare_it():
+    """spring_overture, notes 2-4: frets 12 and 10 on string 1 for 6 frames each (strings 2-3 open), then fret 8 for
+    24 frames, which moves the hand from position 9 to 8. The right hand strums strings 3, 2, 1 and reaches string 1
+    at frame 3 (from 0) of a 6-frame note; the paper's rule (3) then wants fret 10 held for 4 frames from that pick,
+    into the next note. Version 14 centres the 6-frame shift on the change and fret 10 lasts 2 frames from the pick.
+    Version 15 takes the shift's frames from the two notes in proportion to what each can spare (2 of 6 frames and 8
+    of 24): fret 10 lasts the 4 frames, and every note still holds its 2/3."""
+    goal = np.array([[0] * 6, [12, -1, -1, 0, 0, 0], [10, -1, -1, 0, 0, 0], [8, -1, -1, 0, 0, 0]])
+    onset = np.array([0, 17, 23, 29, 53])
+    notes = Notes(goal, goal > 0, onset)
+
+    def from_pick(version):
+        hand = ScriptedLeft(version=version)
+        press = tracked_presses(hand, notes)
+        rows = press[onset[2] + 4:, 0]          # string 1 from the state after the pick's step (frame 3, from 0)
+        held = int(np.argmax(rows != 10)) if np.any(rows != 10) else len(rows)
+        return [p for p, _ in hand.fingering(notes)[1:]], held, [strings_held(press, goal, onset, i) for i in (1, 2, 3)]
+    assert from_pick(14) == ([9, 9, 8], 2, [1, 1, 1])
+    assert from_pick(15) == ([9, 9, 8], 4, [1, 1, 1])
+
+
+def test_version_16_drops_a_string_no_hand_position_spans():
+    """sonata_in_f_major_ms84_no14, notes 23-26: strings 1-2 at fret 6, the same with string 4 at fret 2, then strings
+    1-2 at fret 8 with string 4 still at fret 2: seven frets, which no hand position spans. Version 5's partial search
+    tries only fingerings of all three strings; there are none, so the rule's own stretches from position 2 to fret 8,
+    and the tracked motion holds none of the chord's strings (nor, as the fingers head there, of the note before).
+    Version 16 tries two of the three strings: both frets 8 from position 5 (F1 0.8), and the note before holds too."""
+    goal = np.array([[0] * 6, [6, 6, 0, -1, 0, 0], [6, 6, 0, 2, 0, 0], [8, 8, 0, 2, 0, 0], [0, 0, 0, 0, 8, 0]])
+    onset = np.array([0, 20, 38, 56, 74, 83])
+    notes = Notes(goal, goal > 0, onset)
+    plan15, held15 = fingering_and_held(15, notes)
+    plan16, held16 = fingering_and_held(16, notes)
+    assert plan15[2] == (2, {0: (3, 2), 2: (1, 8), 3: (0, 8)}) and held15 == [2, 0, 0, 1]
+    assert plan16[2] == (5, {2: (1, 8), 3: (0, 8)}) and held16 == [2, 3, 2, 1]

@@ -3,7 +3,7 @@ states the envs observe, the IK planner, the authors' clip reader, the shipped d
 
     format      Motion, save / load (.npz, .json), resample, validate
     kinematics  HandKinematics (guitar-frame FK); link_states, reference_frames, finger_segments, velocities
-    planner     the IK planner: Notes, Tracker, ScriptedLeft / ScriptedRight, ScriptedPlayer (plays through an env)
+    planner     the IK planner: Notes, Tracker, ScriptedLeft / ScriptedRight (played through an env by perform.scripted)
     official    read_official_json (the authors' JSON clips, converted to our joints)
     defaults    default_motion(hand), and `python -m dexguitar.motion.defaults` to regenerate the clips
     render      render_motion (PNG strip, or .mp4 with imageio-ffmpeg)

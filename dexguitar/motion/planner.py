@@ -6,7 +6,7 @@ F1 ~ 1 through `envs.make(...)`, then guitar geometry, press / pick detection, n
 each other (`perform.scripted` prints that table). The same motions, recorded, are the shipped reference clips
 (`motion.defaults`).
 
-How it plays, per hand, before the rollout (`ScriptedPlayer.plan`):
+How it plays, per hand, before the rollout (`perform.scripted.ScriptedPlayer.plans`):
 1. Keyframes in the guitar frame. Left hand: one-finger-per-fret hand positions covering 4 frets; each note's
    target strings get a fingertip on p_{i,k} resting on the fretboard, the other fingers hover 10 mm above the
    strings (version 2 on: where that fingering does not hold a note in a short simulated trial, the cheapest
@@ -23,8 +23,8 @@ How it plays, per hand, before the rollout (`ScriptedPlayer.plan`):
    `mujoco.rollout` on the same model the env uses. The result is an open-loop action sequence for the env.
 4. Both hands (duet): the left hand is planned and simulated first; the right hand crosses each note's strings only
    once the simulated left hand holds the note (the duet's strict gate counts earlier picks as wrong).
-`ScriptedPlayer.play` rolls the MJX env with those actions (vmapped over songs) and reads the per-note scores from
-`State.info`.
+`perform.scripted.ScriptedPlayer.play` rolls the MJX env with those actions (vmapped over songs) and reads the
+per-note scores from `State.info`.
 """
 from __future__ import annotations
 
@@ -32,7 +32,6 @@ import copy
 import dataclasses
 import functools
 import itertools
-import time
 import warnings
 
 import jax
@@ -343,8 +342,15 @@ POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fi
 # is pressed on two strings or more and no string is open, the index laid across all six strings at that fret in a
 # hand pose of its own, the other fingers on the higher frets (`ScriptedLeft.barre_fingering`), kept down over the
 # notes around it that it can play (`ScriptedLeft.extend_barres`); 13 and a note that the fingering of the note
-# before already plays keeps it (`ScriptedLeft.kept`), as a guitarist keeps a chord down over its partial strums.
-LATEST = 13
+# before already plays keeps it (`ScriptedLeft.kept`), as a guitarist keeps a chord down over its partial strums;
+# 14 and a fast line glides: between notes of at most `glide_frames` each fret moved beyond the first costs
+# `glide_cost` (`ScriptedLeft.positions`), so the hand follows a chromatic run in one-fret shifts, its finger sliding
+# along the string, instead of jumping four frets at once, and a shift between notes shorter than 9 frames takes
+# `glide_min` frames or more (not `shift_min`); 15 and a hand position change takes its frames from the two notes
+# beside it in proportion to what each can spare, not half from each: a short note before a long one keeps its fret
+# longer, for a strum that reaches it late; 16 and where no hand position spans a note's pressed strings, the partial
+# search tries fewer of them (`ScriptedLeft.search_partial`) instead of leaving the rule's impossible stretch.
+LATEST = 16
 PAIR = 10               # a finger pressing strings s and s + 1 (0-based) at one fret: "string" PAIR + s (version 7)
 BARRE = 20              # the index across all six strings at one fret: "string" BARRE (version 12)
 BARRE_POSITIONS = 100   # hand position BARRE_POSITIONS + k: the barre hand at fret k (`ScriptedLeft.barre_position`)
@@ -381,6 +387,9 @@ class ScriptedLeft:
     quick_frames = 3        # version 3: a lift or landing beside a note of n < 7 frames takes max(n - 2, this)
     shift_frames = 10       # hand position change (the wrist slides are slow: kp 10 on 0.2 kg)
     shift_min = 7           # version 11: ... or 2 (n - 2n/3) + 2 beside a note of n < 12 frames, not below this
+    glide_frames = 6        # version 14: a move between two notes this short costs `glide_cost` per fret beyond one
+    glide_cost = 1.5
+    glide_min = 5           # ... and a shift between short notes takes this many frames or more
     start_frames = 10       # from the home pose to the first note's position
     first_frames = 4        # version 10: ... or faster, down to this, to end by a first onset that comes sooner,
     first_reach = 3         # where the first position is this many frets from home or fewer (farther: the wrist lags)
@@ -525,8 +534,8 @@ class ScriptedLeft:
         note leaves it, by the least amount. Chords: fingers by fret (index on the lowest), at one fret the string
         nearer string 6 first; more than 4 pressed strings keep the 4 lowest frets. Later versions search where that
         does not hold (2, 5), avoid hurried jumps (6), press neighbouring strings at one fret with one finger (7, 9),
-        plan the positions for the whole song (8), bar a fret with the index (12) and keep a fingering over the notes
-        it already plays (13)."""
+        plan the positions for the whole song (8), bar a fret with the index (12), keep a fingering over the notes
+        it already plays (13), glide along fast lines (14) and leave out a string no hand position spans (16)."""
         return self.plans(notes)[0]
 
     def plans(self, notes: Notes):
@@ -609,7 +618,9 @@ class ScriptedLeft:
         the rule), and the song has as few moves as can be (each costs 1 + 0.05 per fret), from the home pose's
         position; of plans as good, the one that moves latest, as the rule does. The rule moves only when a note
         leaves the position, by the least amount, so an ascending line moves at every note where one move would
-        cover it."""
+        cover it. Version 14: between two notes of at most `glide_frames` each fret of a move beyond the first costs
+        `glide_cost` more, since the wrist cannot cross four frets in the slack of a 5-frame note but follows one fret
+        a note, the finger sliding along its string."""
         top = self.guitar.n_frets - 3
         allowed = []
         for goal in notes.left:
@@ -620,8 +631,15 @@ class ScriptedLeft:
             lo, hi = min(frets), max(frets)
             allowed.append(list(range(max(1, hi - 3), min(lo, top) + 1)) if hi - lo <= 3 else [min(lo, top)])
 
+        short = (np.diff(notes.onset) <= self.glide_frames) & np.array([a is not None for a in allowed], bool)
+        fast = np.zeros(notes.n, bool)      # version 14: note i and the note before, both pressed, both short
+        if self.version >= 14:
+            fast[1:] = short[1:] & short[:-1]
+
         def move(q, p, i):          # a later move costs a little less: of equal plans, the one that moves late
-            return (q != p) * (1 + 0.05 * abs(q - p) - 1e-4 * i)
+            d = abs(q - p)
+            extra = self.glide_cost * max(d - 1, 0) if fast[i] else 0.0
+            return (q != p) * (1 + 0.05 * d + extra - 1e-4 * i)
 
         cost, back = {HOME_POSITION: 0.0}, []
         for i, ps in enumerate(allowed):
@@ -752,10 +770,15 @@ class ScriptedLeft:
         """Where no fingering holds the whole note (version 5; `search_fingering` found none): of the cheapest
         `search_limit` fingerings of any min(4, n) of its n pressed strings (`fingerings`), the one that holds the
         most strings of the note (`held`), the rule's own (p0, fingers0) among them. A six-string barre played as
-        four of its strings scores F1 0.8 (precision 1, recall 4/6), where a fingering that slips scores nothing."""
+        four of its strings scores F1 0.8 (precision 1, recall 4/6), where a fingering that slips scores nothing.
+        Version 16: where no hand position spans those strings (a note over seven frets), fingerings of one string
+        fewer, and so on."""
         pressed = [(int(goal[s]), -s) for s in range(N_STRINGS) if goal[s] > 0]
-        cands = [c for subset in itertools.combinations(pressed, min(4, len(pressed)))
-                 for c in self.fingerings(sorted(subset), p0)]
+        cands = []
+        for k in range(min(4, len(pressed)), 0, -1):      # version 16: fewer strings where no position spans them
+            cands = [c for subset in itertools.combinations(pressed, k) for c in self.fingerings(sorted(subset), p0)]
+            if cands or self.version < 16:
+                break
         cands.sort(key=lambda c: c[0])
         best, best_n = (p0, fingers0), self.held(p0, fingers0, goal, before)
         for _, p, fingers in cands[:self.search_limit]:
@@ -853,7 +876,7 @@ class ScriptedLeft:
         onset_{i+1}. Each change is timed against the note boundary tb = onset_i + 0.5 (version 4: up to
         `lead_frames` earlier): a press that cannot spoil the previous note lands early, one that can lands right
         after tb; a lift that cannot spoil the next note waits, one that can is released before tb; hand position
-        changes are centred on tb."""
+        changes are centred on tb (version 15: split around it in proportion to the frames each note can spare)."""
         plan, ahead = self.plans(notes)
         cfg = self.configs(notes, plan, ahead)
         T = notes.frames
@@ -881,12 +904,16 @@ class ScriptedLeft:
             if p_a != p_b:
                 w = self.shift_frames
                 if self.version >= 11:          # between short notes: quicker, so that each keeps 2/3 of itself
-                    w = min(w, max(self.shift_min, 2 * _spare(short) + 2))
+                    w = min(w, max(self.shift_min if self.version < 14 else self.glide_min, 2 * _spare(short) + 2))
+                t0 = tb - w / 2
+                if self.version >= 15:          # from each note in proportion to the frames it can spare
+                    sa, sb = _spare(dur), _spare(notes.onset[i + 1] - notes.onset[i])
+                    t0 = tb - w * sa / (sa + sb) if sa + sb > 0 else t0
                 for gi, dofs in enumerate(groups):
-                    events[gi].append((tb - w / 2, tb + w / 2, q[dofs], None))
+                    events[gi].append((t0, t0 + w, q[dofs], None))
                 for f in set(f_a) & set(f_b):                  # same finger, same string: slide along it
                     if f_a[f][0] == f_b[f][0] != BARRE:
-                        slides.append((tb - w / 2, tb + w / 2, f, f_b[f][0], f_a[f][1], f_b[f][1]))
+                        slides.append((t0, t0 + w, f, f_b[f][0], f_a[f][1], f_b[f][1]))
                 continue
             lift, land = self.lift_frames, self.land_frames
             if self.version >= 3:
@@ -1014,108 +1041,3 @@ def _harmless(goal, s: int, k: int) -> bool:
 def _key(p) -> tuple:
     """A cache key for a target point: rounded to 0.1 mm."""
     return tuple(float(x) for x in np.round(np.asarray(p, float), 4))
-
-
-# ------------------------------------------------------------------------------------------------- the player
-
-SCORE_FIELDS = ("precision", "recall", "f1", "tp", "predicted", "targets")
-
-
-class ScriptedPlayer:
-    """Plans and plays songs of an env's batch with the scripted hands of its roles (left, right or both).
-
-    Each hand is planned and tracked in its own one-hand scene: the hands never touch each other, so the duet's
-    dynamics are the two hands' side by side and the duet action is the two plans concatenated (role order).
-    The left-handed player's scene (`EnvConfig.mirror`) is the exact mirror image of the right-handed one (no
-    gravity, neck and body symmetric in x), so its actions are the right-handed plan mirrored joint by joint.
-    """
-
-    def __init__(self, env):
-        self.env = env
-        self.roles = env.roles
-        self.hands = {r: ScriptedLeft() if r == "left" else ScriptedRight() for r in self.roles}
-        self.trackers = {r: Tracker(r) for r in self.roles}
-        self.flip = {r: H.mirror_qpos(np.ones(H.N_DOF), r) if env.config.mirror else np.ones(H.N_DOF)
-                     for r in self.roles}
-        self._run = None
-
-    def plan(self, window) -> np.ndarray:
-        """(frames, action_size) env actions playing `window` (a `Window`, or `Notes`) from the home pose.
-        With both hands the right hand crosses each note's strings only once the simulated left hand holds the note
-        (the duet's strict gate counts an earlier pick as wrong)."""
-        notes = window if isinstance(window, Notes) else Notes.from_window(window)
-        parts, earliest = {}, None
-        for r in sorted(self.roles):                      # "left" first: its timing gates the right hand
-            if r == "left":
-                ctrl, q = self.trackers[r].track(self.hands[r].desired(notes))
-                if "right" in self.roles:
-                    earliest = self.ready_steps(notes, q)
-            else:
-                ctrl, _ = self.trackers[r].track(self.hands[r].desired(notes, earliest))
-            parts[r] = self.trackers[r].to_action(ctrl)
-        return np.concatenate([parts[r] * self.flip[r] for r in self.roles], axis=1).astype(np.float32)
-
-    def ready_steps(self, notes: Notes, q: np.ndarray) -> np.ndarray:
-        """(n,) per note, the first control step whose simulated left hand holds every string as the note asks
-        (the env's press detection on MuJoCo C states); the note's onset when it never does."""
-        kin, guitar = self.hands["left"].kin, self.hands["left"].guitar
-        segs = []
-        for j in range(1, len(q)):                        # state after step j - 1
-            kin.set(q[j])
-            segs.append(kin.segments())
-        press = np.asarray(jax.vmap(lambda s: detect.pressed_frets(s, guitar))(
-            jnp.asarray(np.array(segs), jnp.float32)))
-        out = notes.onset[:-1].copy()
-        for i in range(notes.n):
-            a, b = notes.onset[i], notes.onset[i + 1]
-            ok = np.asarray(scoring.left_ok(jnp.asarray(press[a:b]), jnp.asarray(notes.left[i]))).all(axis=1)
-            out[i] = a + int(np.argmax(ok)) if ok.any() else a
-        return out
-
-    def rollout(self, songs, actions: np.ndarray):
-        """Roll the env over songs (B,) with actions (B, T, A), vmapped; returns per-step info plus reward,
-        terminated and done (B, T, ...)."""
-        env = self.env
-        if self._run is None:
-            def one(song, acts):
-                state = env.reset(jax.random.PRNGKey(0), song=song)
-
-                def body(s, a):
-                    s = env.step(s, a)
-                    return s, dict(s.info, reward=s.reward, terminated=s.terminated, done=s.done)
-                return jax.lax.scan(body, state, acts)[1]
-            self._run = jax.jit(jax.vmap(one))
-        info = self._run(jnp.asarray(songs, jnp.int32), jnp.asarray(actions, jnp.float32))
-        return jax.tree.map(np.asarray, info)
-
-    def play(self, songs=0) -> list[dict] | dict:
-        """Plan and play song index(es) of the env's batch. Per song: {"frames", "notes", "plan_s", "roll_s",
-        per hand (left / right / both): {"f1", "precision", "recall" (means over notes), "per_note" (n, 6)}}."""
-        single = np.ndim(songs) == 0
-        songs = np.atleast_1d(songs)
-        plans, out = [], []
-        for i in songs:
-            t0 = time.time()
-            window = self.env.sample_window(jax.random.PRNGKey(0), int(i))
-            plans.append(self.plan(window))
-            out.append({"frames": len(plans[-1]), "notes": int(window.n) - 1, "plan_s": time.time() - t0})  # no rest
-        T = max(len(p) for p in plans)
-        acts = np.stack([np.concatenate([p, np.repeat(p[-1:], T - len(p), 0)]) for p in plans])
-        t0 = time.time()
-        info = self.rollout(songs, acts)
-        roll = time.time() - t0
-        hands = [h for h in ("left", "right", "both") if h in self.roles or (h == "both" and len(self.roles) == 2)]
-        for b, res in enumerate(out):
-            end = info["note_end"][b, :res["frames"]] & (info["song_note"][b, :res["frames"]] >= 0)  # song notes
-            res["roll_s"] = roll
-            for h in hands:
-                per = info[h][b, :res["frames"]][end]
-                if h == "both":     # the end of note k+1 holds note k's final verdict (scoring.close)
-                    per = scoring.per_note_both(per, info["both_now"][b, :res["frames"]][end])
-                res[h] = {"per_note": per, **{k: float(per[:, j].mean()) if len(per) else float("nan")
-                                              for j, k in enumerate(SCORE_FIELDS[:3])}}
-            res["closed"] = int(end.sum())
-            term = np.flatnonzero(info["terminated"][b, :res["frames"]])
-            res["terminated_at"] = int(term[0]) if len(term) else None       # a failure would end the episode
-            res["reward"] = info["reward"][b, :res["frames"]]
-        return out[0] if single else out

@@ -24,8 +24,10 @@ from dexguitar.music import timeline as TL
 
 HANDS = {"left": ("left",), "right": ("right",), "duet": ("left", "right", "both")}
 # Songs a CPU plays at once in the duet. Five or six in one program stalled XLA's CPU run on a 2-core machine every
-# time (the process idle in `device_get`; sixteenth and seventeenth sessions); four or fewer never did.
+# time (the process idle in `device_get`; sixteenth and seventeenth sessions); four or fewer never did. One hand
+# stalled the same way with 48 songs (twentieth session: `--procedural 48`, twice), never with 16 or 32.
 CPU_DUET_SONGS = 4
+CPU_HAND_SONGS = 16
 
 
 def rollout_notes(env, act, params, song_index, key, hands):
@@ -170,12 +172,15 @@ def summarize(rows, hands) -> dict:
 
 
 def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str | None = None) -> dict:
-    """F1 of a policy on each song, all songs played at once (one env each; the duet on a CPU: `CPU_DUET_SONGS` at
-    a time). `hand` defaults to the policy's (a synchronizer plays the duet). Returns {title: {"summary", "notes"}}."""
+    """F1 of a policy on each song, all songs played at once (one env each; on a CPU `CPU_DUET_SONGS` or
+    `CPU_HAND_SONGS` at a time). `hand` defaults to the policy's (a synchronizer plays the duet). Returns
+    {title: {"summary", "notes"}}."""
     hand = hand or spec.hand
     cfg = spec.env_config(env_config or E.EnvConfig()).evaluation()
     params = jax.tree.map(jnp.asarray, params)
-    size = CPU_DUET_SONGS if hand == "duet" and jax.default_backend() == "cpu" else max(len(songs), 1)
+    size = max(len(songs), 1)
+    if jax.default_backend() == "cpu":
+        size = min(size, CPU_DUET_SONGS if hand == "duet" else CPU_HAND_SONGS)
     timelines = [TL.from_song(s) for s in songs]
     if cfg.feedforward and size < len(songs):       # plan every song in one pool; the chunks read the plans' disk cache
         FF.plan_songs(TL.batch(timelines), cfg.rest_frames, version=int(cfg.feedforward))

@@ -1,6 +1,6 @@
-"""The scripted player's F1 table: the IK planner (`dexguitar.motion.planner`, no learning) plays songs through the
-envs, scored by the envs themselves: the embedded single-note songs (`experiments/scripted_f1.md`) or any tabs, e.g.
-the authors' songs (`experiments/results/scripted_official.md`).
+"""The scripted player and its F1 table: the IK planner (`dexguitar.motion.planner`, no learning) plays songs through
+the envs (`ScriptedPlayer`), scored by the envs themselves: the embedded single-note songs
+(`experiments/scripted_f1.md`) or any tabs, e.g. the authors' songs (`experiments/results/scripted_official.md`).
 
 Run `python -m dexguitar.perform.scripted [--envs left,right,duet] [--songs a,b | --tabs FILE_OR_FOLDER ...]`.
 """
@@ -9,12 +9,130 @@ from __future__ import annotations
 import argparse
 import time
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
 from dexguitar import envs
-from dexguitar.motion.planner import ScriptedPlayer
+from dexguitar.envs import scoring
+from dexguitar.motion import feedforward as FF
+from dexguitar.motion.planner import LATEST, Notes, ScriptedLeft, ScriptedRight, Tracker
 from dexguitar.music import library
 from dexguitar.music import timeline as TL
+from dexguitar.world import detect
+from dexguitar.world import hands as H
+
+SCORE_FIELDS = ("precision", "recall", "f1", "tp", "predicted", "targets")
+
+class ScriptedPlayer:
+    """Plans and plays songs of an env's batch with the scripted hands of its roles (left, right or both).
+
+    Each hand is planned and tracked in its own one-hand scene: the hands never touch each other, so the duet's
+    dynamics are the two hands' side by side and the duet action is the two plans concatenated (role order).
+    The left-handed player's scene (`EnvConfig.mirror`) is the exact mirror image of the right-handed one (no
+    gravity, neck and body symmetric in x), so its actions are the right-handed plan mirrored joint by joint.
+    """
+
+    def __init__(self, env, version: int = LATEST):
+        self.env = env
+        self.roles = env.roles
+        self.version = version
+        self.left = ScriptedLeft(version)                  # its kinematics judge when the left hand is ready
+        self.right = ScriptedRight()
+        self.tracker = Tracker("right") if "right" in self.roles else None
+        self.flip = {r: H.mirror_qpos(np.ones(H.N_DOF), r) if env.config.mirror else np.ones(H.N_DOF)
+                     for r in self.roles}
+        self._run = None
+
+    def plan(self, window) -> np.ndarray:
+        """(frames, action_size) env actions playing `window` (a `Window`, or `Notes`) from the home pose."""
+        return self.plans([window])[0]
+
+    def plans(self, windows) -> list[np.ndarray]:
+        """`plan` of each window. The left hand is planned in worker processes with one BLAS thread
+        (`feedforward.plan_all`), as the env's feedforward is, so a table made here plays the plans a residual
+        policy is given (planned in this process with 2 BLAS threads, `sonata_in_f_major_ms84_no14` scored 0.928
+        where its one-thread plan scores 0.938). With both hands the right hand crosses each note's strings only once
+        the simulated left hand holds the note (the duet's strict gate counts an earlier pick as wrong)."""
+        notes = [w if isinstance(w, Notes) else Notes.from_window(w) for w in windows]
+        left = (FF.plan_all([(n.left, n.pick, n.onset, self.version) for n in notes], log=lambda m: None)
+                if "left" in self.roles else [None] * len(notes))
+        out = []
+        for n, planned in zip(notes, left):
+            parts, earliest = {}, None
+            if planned is not None:
+                parts["left"] = planned[0]
+                earliest = self.ready_steps(n, planned[1]) if self.tracker is not None else None
+            if self.tracker is not None:
+                ctrl, _ = self.tracker.track(self.right.desired(n, earliest))
+                parts["right"] = self.tracker.to_action(ctrl)
+            out.append(np.concatenate([parts[r] * self.flip[r] for r in self.roles], axis=1).astype(np.float32))
+        return out
+
+    def ready_steps(self, notes: Notes, q: np.ndarray) -> np.ndarray:
+        """(n,) per note, the first control step whose simulated left hand holds every string as the note asks
+        (the env's press detection on MuJoCo C states); the note's onset when it never does."""
+        kin, guitar = self.left.kin, self.left.guitar
+        segs = []
+        for j in range(1, len(q)):                        # state after step j - 1
+            kin.set(q[j])
+            segs.append(kin.segments())
+        press = np.asarray(jax.vmap(lambda s: detect.pressed_frets(s, guitar))(
+            jnp.asarray(np.array(segs), jnp.float32)))
+        out = notes.onset[:-1].copy()
+        for i in range(notes.n):
+            a, b = notes.onset[i], notes.onset[i + 1]
+            ok = np.asarray(scoring.left_ok(jnp.asarray(press[a:b]), jnp.asarray(notes.left[i]))).all(axis=1)
+            out[i] = a + int(np.argmax(ok)) if ok.any() else a
+        return out
+
+    def rollout(self, songs, actions: np.ndarray):
+        """Roll the env over songs (B,) with actions (B, T, A), vmapped; returns per-step info plus reward,
+        terminated and done (B, T, ...)."""
+        env = self.env
+        if self._run is None:
+            def one(song, acts):
+                state = env.reset(jax.random.PRNGKey(0), song=song)
+
+                def body(s, a):
+                    s = env.step(s, a)
+                    return s, dict(s.info, reward=s.reward, terminated=s.terminated, done=s.done)
+                return jax.lax.scan(body, state, acts)[1]
+            self._run = jax.jit(jax.vmap(one))
+        info = self._run(jnp.asarray(songs, jnp.int32), jnp.asarray(actions, jnp.float32))
+        return jax.tree.map(np.asarray, info)
+
+    def play(self, songs=0) -> list[dict] | dict:
+        """Plan and play song index(es) of the env's batch. Per song: {"frames", "notes", "plan_s", "roll_s",
+        per hand (left / right / both): {"f1", "precision", "recall" (means over notes), "per_note" (n, 6)}}."""
+        single = np.ndim(songs) == 0
+        songs = np.atleast_1d(songs)
+        t0 = time.time()
+        windows = [self.env.sample_window(jax.random.PRNGKey(0), int(i)) for i in songs]
+        plans = self.plans(windows)
+        plan_s = (time.time() - t0) / len(songs)
+        out = [{"frames": len(p), "notes": int(w.n) - 1, "plan_s": plan_s} for p, w in zip(plans, windows)]  # no rest
+        T = max(len(p) for p in plans)
+        acts = np.stack([np.concatenate([p, np.repeat(p[-1:], T - len(p), 0)]) for p in plans])
+        t0 = time.time()
+        info = self.rollout(songs, acts)
+        roll = time.time() - t0
+        hands = [h for h in ("left", "right", "both") if h in self.roles or (h == "both" and len(self.roles) == 2)]
+        for b, res in enumerate(out):
+            end = info["note_end"][b, :res["frames"]] & (info["song_note"][b, :res["frames"]] >= 0)  # song notes
+            res["roll_s"] = roll
+            for h in hands:
+                per = info[h][b, :res["frames"]][end]
+                if h == "both":     # the end of note k+1 holds note k's final verdict (scoring.close)
+                    per = scoring.per_note_both(per, info["both_now"][b, :res["frames"]][end])
+                res[h] = {"per_note": per, **{k: float(per[:, j].mean()) if len(per) else float("nan")
+                                              for j, k in enumerate(SCORE_FIELDS[:3])}}
+            res["closed"] = int(end.sum())
+            term = np.flatnonzero(info["terminated"][b, :res["frames"]])
+            res["terminated_at"] = int(term[0]) if len(term) else None       # a failure would end the episode
+            res["reward"] = info["reward"][b, :res["frames"]]
+        return out[0] if single else out
+
 
 SINGLE_NOTE_SONGS = ("ode_to_joy", "twinkle", "c_major_scale", "greensleeves", "minuet_in_g", "amazing_grace",
                      "chromatic_1234")
