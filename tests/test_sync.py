@@ -108,23 +108,29 @@ def test_a_scaled_left_hand_acts_at_its_scale_alone_and_in_the_duet(pair, tmp_pa
         check_init(tmp_path / "scaled", "left", 9)
 
 
-def test_a_cpu_plays_one_hand_some_songs_at_a_time(tmp_path, monkeypatch):
-    """48 left-hand songs in one program stalled XLA's CPU run on a 2-core machine as the duet's five did, so a CPU
-    plays one hand `CPU_HAND_SONGS` songs at a time. Here one at a time: two songs take the one-song program and each
-    scores exactly as it does alone."""
-    from dexguitar.cli import POLICIES
+def one_song_at_a_time(tmp_path, monkeypatch, params, spec, limit: str):
+    """The tiny song evaluated twice in one call and once alone, with the CPU's songs per program (`limit`) set to 1:
+    (song, two, one). Both calls take the one-song program and each copy scores exactly as the song alone."""
     from dexguitar.music import load_song
     from dexguitar.perform import evaluate as EV
-    params, meta = PO.load(POLICIES / "left_general")
-    spec = PO.PolicySpec.from_meta(meta)
     (tmp_path / "tiny.txt").write_text(TINY_SONG)
     song = load_song(tmp_path / "tiny.txt")
-    monkeypatch.setattr(EV, "CPU_HAND_SONGS", 1)
+    monkeypatch.setattr(EV, limit, 1)
     monkeypatch.setattr(EV, "_CACHE", {})
     two = EV.evaluate(params, spec, [song, song])
     one = EV.evaluate(params, spec, [song])
-    assert len(EV._CACHE) == 1
+    assert len(EV._CACHE) == 1                                  # a single program, of one song's shape
+    assert list(two) == [song.title, f"{song.title} (1)"] and list(one) == [song.title]
     assert two[song.title] == one[song.title] == two[f"{song.title} (1)"]
+    return song, two, one
+
+
+def test_a_cpu_plays_one_hand_some_songs_at_a_time(tmp_path, monkeypatch):
+    """48 left-hand songs in one program stalled XLA's CPU run on a 2-core machine as the duet's five did, so a CPU
+    plays one hand `CPU_HAND_SONGS` songs at a time."""
+    from dexguitar.cli import POLICIES
+    params, meta = PO.load(POLICIES / "left_general")
+    song, two, _ = one_song_at_a_time(tmp_path, monkeypatch, params, PO.PolicySpec.from_meta(meta), "CPU_HAND_SONGS")
     assert two[song.title]["summary"]["left"]["notes"] == 2          # the note and the chord that press a string
 
 
@@ -138,15 +144,7 @@ def test_a_cpu_plays_the_duet_a_few_songs_at_a_time(tmp_path, monkeypatch):
     from dexguitar.perform import evaluate as EV
     from dexguitar.perform.play import pair as general_pair
     params, spec = general_pair(POLICIES / "left_general", POLICIES / "right_mixed")
-    (tmp_path / "tiny.txt").write_text(TINY_SONG)
-    song = load_song(tmp_path / "tiny.txt")
-    monkeypatch.setattr(EV, "CPU_DUET_SONGS", 1)
-    monkeypatch.setattr(EV, "_CACHE", {})
-    two = EV.evaluate(params, spec, [song, song])
-    one = EV.evaluate(params, spec, [song])
-    assert len(EV._CACHE) == 1                                  # a single program, of one song's shape
-    assert list(two) == [song.title, f"{song.title} (1)"] and list(one) == [song.title]
-    assert two[song.title] == one[song.title] == two[f"{song.title} (1)"]
+    song, two, one = one_song_at_a_time(tmp_path, monkeypatch, params, spec, "CPU_DUET_SONGS")
     assert two[song.title]["summary"]["both"]["notes"] == 3                  # two notes and a chord, all judged
     # songs not planned yet are planned together, in one pool of planner processes, before the first chunk plays
     (tmp_path / "other.txt").write_text(TINY_SONG.replace("B|----1", "B|----3"))
