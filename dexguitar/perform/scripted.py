@@ -24,6 +24,7 @@ from dexguitar.world import hands as H
 
 SCORE_FIELDS = ("precision", "recall", "f1", "tp", "predicted", "targets")
 
+
 class ScriptedPlayer:
     """Plans and plays songs of an env's batch with the scripted hands of its roles (left, right or both).
 
@@ -51,9 +52,10 @@ class ScriptedPlayer:
     def plans(self, windows) -> list[np.ndarray]:
         """`plan` of each window. The left hand is planned in worker processes with one BLAS thread
         (`feedforward.plan_all`), as the env's feedforward is, so a table made here plays the plans a residual
-        policy is given (planned in this process with 2 BLAS threads, `sonata_in_f_major_ms84_no14` scored 0.928
-        where its one-thread plan scores 0.938). With both hands the right hand crosses each note's strings only once
-        the simulated left hand holds the note (the duet's strict gate counts an earlier pick as wrong)."""
+        policy is given (in the 15 official songs' table, plans made in this process with 2 BLAS threads scored
+        `sonata_in_f_major_ms84_no14` 0.928, one-thread plans 0.900). With both hands the right hand crosses each
+        note's strings only once the simulated left hand holds the note (the duet's strict gate counts an earlier
+        pick as wrong)."""
         notes = [w if isinstance(w, Notes) else Notes.from_window(w) for w in windows]
         left = (FF.plan_all([(n.left, n.pick, n.onset, self.version) for n in notes], log=lambda m: None)
                 if "left" in self.roles else [None] * len(notes))
