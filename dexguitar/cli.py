@@ -27,7 +27,7 @@ from dexguitar.envs.bench import bench_env, check_scenes
 from dexguitar.errors import UserError
 from dexguitar.learn import distill as DI
 from dexguitar.learn import policy as PO
-from dexguitar.learn.run import check_init, check_out, compilation_cache, load_config, train
+from dexguitar.learn.run import check_init, check_out, compilation_cache, load_config, recorded_config, train
 from dexguitar.learn.sync import SyncTrainer
 from dexguitar.learn.trainer import Trainer
 from dexguitar.motion import load_motion
@@ -182,22 +182,35 @@ def _distill(args) -> int:
     return 0
 
 
+def _song_source(source: str) -> str:
+    """A --song argument as a resumed run can find it again from any working directory: a file's absolute path, an
+    embedded song's name."""
+    return str(Path(source).resolve()) if Path(source).exists() else source
+
+
 def _sync(args) -> int:
     """Synchronize two frozen policies on songs (Sec. 4), then evaluate before and after."""
     out = Path(args.out)
-    left, right = args.left, args.right
-    if args.resume and (out / "config.json").exists() and not (left and right):
-        recorded = json.loads((out / "config.json").read_text())
-        left, right = left or recorded.get("left"), right or recorded.get("right")
+    left, right, song_files = args.left, args.right, args.song
+    # --resume continues the run as config.json recorded it: what is not given again is taken from there
+    recorded = json.loads((out / "config.json").read_text()) if args.resume and (out / "config.json").exists() else {}
+    left, right = left or recorded.get("left"), right or recorded.get("right")
+    song_files = song_files or recorded.get("song_files")
     if not (left or right) and not args.resume:        # GSync: the general pair (issue 11)
         left, right = _general_pair("sync")
     if not (left and right):
         raise UserError("sync: give --left and --right (exported policies or run directories), or neither for the "
                         "general pair")
-    cfg, env_cfg = load_config(args.config, hand="duet", num_envs=args.envs, seed=args.seed,
-                               iterations=args.iterations)
+    if not song_files:
+        raise UserError(f"sync: give --song (tab files or embedded song names)"
+                        + (f"; {out / 'config.json'} records none" if recorded else ""))
+    overrides = dict(hand="duet", num_envs=args.envs, seed=args.seed, iterations=args.iterations)
+    if recorded and not args.config:
+        cfg, env_cfg = recorded_config(out, **overrides)
+    else:
+        cfg, env_cfg = load_config(args.config, **overrides)
     check_out(out, args.resume)
-    songs = [load_song(s) for s in args.song]
+    songs = [load_song(s) for s in song_files]
     pair = PO.load_pair(left, right)
     motion = load_motion(args.motion or "left")
     trainer = SyncTrainer(cfg, [TL.from_song(s) for s in songs], reference_frames(motion), *pair, env_cfg)
@@ -206,7 +219,7 @@ def _sync(args) -> int:
           f"writing {out}", file=sys.stderr)
     summary = train(trainer, out, iterations=cfg.iterations, resume=args.resume,
                     meta={"songs": [s.title for s in songs], "motion": motion.name, "left": str(left),
-                          "right": str(right)},
+                          "right": str(right), "song_files": [_song_source(s) for s in song_files]},
                     stop_after_calls=args.stop_after_calls, max_minutes=args.max_minutes, devices=args.devices)
     print(json.dumps(summary), file=sys.stderr)
     if args.no_eval:
@@ -336,7 +349,8 @@ def _plot(args) -> int:
 
 def _add_run_args(p: argparse.ArgumentParser, out_help: str) -> None:
     """The options every resumable training run has (`train`, `sync`)."""
-    p.add_argument("--config", help="experiments/*.py defining CONFIG (a TrainConfig) and optionally ENV")
+    p.add_argument("--config", help="experiments/*.py defining CONFIG (a TrainConfig) and optionally ENV (sync "
+                                    "--resume without it: the run's own, from its config.json)")
     p.add_argument("--out", required=True, help=out_help)
     p.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
     p.add_argument("--envs", type=positive, help="override CONFIG.num_envs")
@@ -416,7 +430,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_distill)
 
     p = sub.add_parser("sync", help="synchronize a frozen left and right policy on songs (Sec. 4); resumable")
-    p.add_argument("--song", nargs="+", required=True, help="tab files or embedded song names")
+    p.add_argument("--song", nargs="+", help="tab files or embedded song names (taken from --out on --resume)")
     p.add_argument("--left", help="exported left-hand policy or run directory (taken from --out on --resume; "
                                   "neither --left nor --right: the general pair, models/policies/left_general and "
                                   "right_mixed)")

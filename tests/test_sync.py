@@ -226,7 +226,7 @@ def test_export_plays_before_and_after(sync_trainer, tmp_path):
     np.testing.assert_allclose(after(obs), mu, atol=2e-3)
 
 
-def test_sync_command_end_to_end(tmp_path, capsys):
+def test_sync_command_end_to_end(tmp_path, capsys, monkeypatch):
     from dexguitar.cli import main
     dirs = []
     calm = random_policy(jax.random.PRNGKey(1), "left", 0.0), random_policy(jax.random.PRNGKey(2), "right", 0.0)
@@ -237,7 +237,7 @@ def test_sync_command_end_to_end(tmp_path, capsys):
     song.write_text(TINY_SONG)
     out = tmp_path / "run"
     args = ["sync", "--song", str(song), "--left", dirs[0], "--right", dirs[1], "--config",
-            "experiments/cpu_smoke.py", "--out", str(out)]
+            "experiments/cpu_smoke.py", "--out", str(out), "--seed", "3"]
     assert main(args + ["--iterations", "1", "--no-eval"]) == 0
     capsys.readouterr()
     assert main(args + ["--iterations", "1", "--no-eval"]) == 2
@@ -245,8 +245,17 @@ def test_sync_command_end_to_end(tmp_path, capsys):
     # resume with the policies recorded in the run (nothing left to train); the before/after evaluation that `sync`
     # ends with runs in tests/test_notebooks.py (synchronize.ipynb) and test_export_plays_before_and_after
     assert main(["sync", "--song", str(song), "--config", "experiments/cpu_smoke.py", "--out", str(out),
-                 "--resume", "--iterations", "1", "--no-eval"]) == 0
+                 "--seed", "3", "--resume", "--iterations", "1", "--no-eval"]) == 0
     assert [json.loads(x)["iteration"] for x in (out / "metrics.jsonl").read_text().splitlines()] == [1]
+    capsys.readouterr()
+    # a seed other than the run's refuses, naming it; with nothing but --out, the run goes on as config.json has it
+    # (songs, config, seed and policies), from any working directory
+    assert main(["sync", "--out", str(out), "--resume", "--seed", "4", "--no-eval"]) == 2
+    assert "train.seed: 3 -> 4" in capsys.readouterr().err
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    assert main(["sync", "--out", str(out), "--resume", "--iterations", "2", "--no-eval"]) == 0
+    assert [json.loads(x)["iteration"] for x in (out / "metrics.jsonl").read_text().splitlines()] == [1, 2]
     meta = json.loads((out / "policy" / "policy.json").read_text())
     assert meta["kind"] == "synchronizer" and meta["sources"]["right"]["path"] == "../../right"
 
@@ -272,8 +281,8 @@ def test_shipped_general_left_hand_is_the_planner_with_noise_it_survives():
 @pytest.mark.parametrize("song, version", [("wipe_out", 9), ("canon_in_d_major1", 9), ("canon_in_d_major2", 9),
                                            ("come_as_you_are", 9), ("dont_cry", 13), ("capriccio_op59_no16", 13),
                                            ("prelude1_in_c_major_chords", 15), ("super_mario", 5),
-                                           ("beethoven_virus", 11), ("turkish_march", 11), ("spring_overture", 11),
-                                           ("johnny_b_goodie", 11), ("flight_of_the_bumblebee1", 15),
+                                           ("beethoven_virus", 11), ("turkish_march", 11), ("spring_overture", 18),
+                                           ("johnny_b_goodie", 11), ("flight_of_the_bumblebee1", 17),
                                            ("sonata_in_f_major_ms84_no14", 12), ("snow", 13)])
 def test_shipped_gsync_synchronizer_loads_the_shipped_general_pair(song, version):
     """models/policies/gsync_<stem> names its frozen hands relative to itself, so a clone plays it as shipped, with

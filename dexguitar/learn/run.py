@@ -24,6 +24,7 @@ import jax
 import numpy as np
 import optax
 
+from dexguitar import envs as E
 from dexguitar.errors import RunError, TrainingDiverged, UserError
 from dexguitar.learn import checkpoint as C
 from dexguitar.learn import policy as PO
@@ -143,7 +144,7 @@ class RunDir:
             elif key == "env" and a != b:
                 diffs += [f"env.{k}: {a.get(k)!r} -> {b.get(k)!r}" for k in sorted(set(a or {}) | set(b or {}))
                           if (a or {}).get(k) != (b or {}).get(k)]
-            elif key not in ("env", "train") and a != b:
+            elif key not in ("env", "train") and a != b and key in old:   # a key newer than the run: not compared
                 diffs.append(f"{key}: {json.dumps(a)[:80]} -> {json.dumps(b)[:80]}")
         if diffs:
             raise RunError(f"{self.path} was made with another setup; --resume continues a run as it was made. "
@@ -332,6 +333,18 @@ def _rollback(trainer, run, where, attempt: int):
         state, _ = C.restore(run.ckpt, state)
     state = state.replace(key=jax.random.fold_in(state.key, 7919 * attempt))
     return where.put(state, shardings)
+
+
+def recorded_config(out, **overrides):
+    """(TrainConfig, EnvConfig) as the run in `out` recorded them in its config.json, with TrainConfig fields overridden
+    by name (None = keep): `--resume` without `--config` continues the run as it was made."""
+    record = json.loads((Path(out) / "config.json").read_text())
+    train = {k: v for k, v in record["train"].items() if k in TRAIN_DEFAULTS}
+    env_fields = {f.name for f in dataclasses.fields(E.EnvConfig)}
+    env = {k: tuple(v) if isinstance(v, list) else v for k, v in record["env"].items() if k in env_fields}
+    cfg = dataclasses.replace(TrainConfig(**train), **{k: v for k, v in overrides.items()
+                                                       if k in TRAIN_DEFAULTS and v is not None})
+    return cfg, E.EnvConfig(**env)
 
 
 def load_config(path: str | None, **overrides):
