@@ -206,7 +206,7 @@ def _sync(args) -> int:
                         + (f"; {out / 'config.json'} records none" if recorded else ""))
     overrides = dict(hand="duet", num_envs=args.envs, seed=args.seed, iterations=args.iterations)
     if recorded and not args.config:
-        cfg, env_cfg = recorded_config(out, **overrides)
+        cfg, env_cfg = recorded_config(recorded, **overrides)
     else:
         cfg, env_cfg = load_config(args.config, **overrides)
     check_out(out, args.resume)

@@ -335,16 +335,23 @@ def _rollback(trainer, run, where, attempt: int):
     return where.put(state, shardings)
 
 
-def recorded_config(out, **overrides):
-    """(TrainConfig, EnvConfig) as the run in `out` recorded them in its config.json, with TrainConfig fields overridden
-    by name (None = keep): `--resume` without `--config` continues the run as it was made."""
-    record = json.loads((Path(out) / "config.json").read_text())
+def recorded_config(record: dict, **overrides):
+    """(TrainConfig, EnvConfig) as a run recorded them (its config.json, read), with TrainConfig fields overridden by
+    name (None = keep): `--resume` without `--config` continues the run as it was made."""
     train = {k: v for k, v in record["train"].items() if k in TRAIN_DEFAULTS}
     env_fields = {f.name for f in dataclasses.fields(E.EnvConfig)}
     env = {k: tuple(v) if isinstance(v, list) else v for k, v in record["env"].items() if k in env_fields}
-    cfg = dataclasses.replace(TrainConfig(**train), **{k: v for k, v in overrides.items()
-                                                       if k in TRAIN_DEFAULTS and v is not None})
-    return cfg, E.EnvConfig(**env)
+    return _overridden(TrainConfig(**train), overrides), E.EnvConfig(**env)
+
+
+def _overridden(cfg: TrainConfig, overrides: dict) -> TrainConfig:
+    """`cfg` with the fields named in `overrides` replaced (None = keep), checked (a UserError names a bad field)."""
+    cfg = dataclasses.replace(cfg, **{k: v for k, v in overrides.items() if k in TRAIN_DEFAULTS and v is not None})
+    try:
+        cfg.check()
+    except ValueError as err:
+        raise UserError(str(err)) from None
+    return cfg
 
 
 def load_config(path: str | None, **overrides):
@@ -361,10 +368,4 @@ def load_config(path: str | None, **overrides):
         if not isinstance(ns.get("CONFIG"), TrainConfig):
             raise UserError(f"--config {path}: defines no CONFIG = TrainConfig(...)")
         cfg, env = ns["CONFIG"], ns.get("ENV")
-    fields = {f.name for f in dataclasses.fields(TrainConfig)}
-    cfg = dataclasses.replace(cfg, **{k: v for k, v in overrides.items() if k in fields and v is not None})
-    try:
-        cfg.check()
-    except ValueError as err:
-        raise UserError(str(err)) from None
-    return cfg, env
+    return _overridden(cfg, overrides), env
