@@ -351,8 +351,12 @@ POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fi
 # longer, for a strum that reaches it late; 16 and where no hand position spans a note's pressed strings, the partial
 # search tries fewer of them (`ScriptedLeft.search_partial`) instead of leaving the rule's impossible stretch; 17 a
 # trill keeps the lower finger down and pulls off at the boundary (`ScriptedLeft.anchored`); 18 a finger leaving or
-# landing in a shift of up to 2 frets passes above the strings where one beside it is open (`ScriptedLeft.shift_via`).
-LATEST = 18
+# landing in a shift of up to 2 frets passes above the strings where one beside it is open (`ScriptedLeft.shift_via`);
+# 19 the fingers above a barre may be any of the other three, one of them across two neighbouring strings at one fret
+# (`ScriptedLeft.barre_others`), so a barre holds more of the notes around it; a barre is not kept over notes where
+# that leaves the next note with a hand position change at each end (`ScriptedLeft.squeezes`); and a finger that
+# presses a place in the note before keeps it in the same hand position (`ScriptedLeft.guided`).
+LATEST = 19
 PAIR = 10               # a finger pressing strings s and s + 1 (0-based) at one fret: "string" PAIR + s (version 7)
 BARRE = 20              # the index across all six strings at one fret: "string" BARRE (version 12)
 BARRE_POSITIONS = 100   # hand position BARRE_POSITIONS + k: the barre hand at fret k (`ScriptedLeft.barre_position`)
@@ -583,6 +587,8 @@ class ScriptedLeft:
                     out.append(barre)
                     ahead.append((p, fingers))
                     continue
+            if self.version >= 19:
+                fingers = self.guided(p, fingers, press, goal, before)
             if self.version >= 17:
                 nxt = notes.left[i + 1] if i + 1 < notes.n else None
                 fingers = self.anchored(p, fingers, goal, out[-1] if out else None, nxt)
@@ -602,6 +608,21 @@ class ScriptedLeft:
         if before is None or before[0] >= BARRE_POSITIONS or not before[1] or not covers(before[1], goal):
             return None
         return before if self.holds(*before, goal, before) else None
+
+    def guided(self, p: int, fingers: dict, press: list, goal, before: tuple | None) -> dict:
+        """Version 19: where a place pressed in the note before, in the same hand position, is pressed again by
+        another finger, the cheapest fingering that leaves it under the same finger (`fingerings`) if one holds the
+        note; else `fingers`. A guitarist keeps such a guide finger down. `sonata`'s bass, string 6 at fret 1 under
+        `1 x x 0 1 0` then `1 3 x x x x`, went from the middle finger to the index, which crossed the open string 3
+        and left string 2 before its note had held 2/3 of itself."""
+        if before is None or before[0] != p:
+            return fingers
+        stay = {sk: f for f, sk in before[1].items() if sk in fingers.values()}
+        if all(fingers.get(f) == sk for sk, f in stay.items()):
+            return fingers
+        cands = [c for c in self.fingerings(press, p) if c[1] == p and all(c[2].get(f) == sk for sk, f in stay.items())]
+        found = self.first_holding(cands, goal, before)
+        return found[1] if found is not None else fingers
 
     def anchored(self, p: int, fingers: dict, goal, prev: tuple | None, nxt) -> dict:
         """Version 17, a trill: a single note above the note before on the same string, in the same hand position,
@@ -771,24 +792,69 @@ class ScriptedLeft:
             return None
         fingers = {0: (BARRE, low)} | _by_fret(rest, low, first=1)
         p = BARRE_POSITIONS + low
-        return (p, fingers) if self.holds(p, fingers, goal, before) else None
+        if self.holds(p, fingers, goal, before):
+            return p, fingers
+        if self.version >= 19:
+            return self.first_holding(self.barre_others(rest, low), goal, before)
+        return None
+
+    def barre_others(self, rest: list, low: int) -> list:
+        """Version 19: [(cost, barre position, fingers)] for the frets above a barre at `low` (`rest`: (fret,
+        -string), fret order), where the rule's fingers do not hold: any three of the other fingers in fret order,
+        two neighbouring strings at one fret also as one finger across them (`PAIR`). `sonata`'s `1 x x 3 3 1` under
+        the barre of the notes beside it: ring and pinky on strings 3 and 2 at fret 3 pressed fret 1 on string 2
+        (a pinky this short lies flat); the ring finger across both holds, where the hand had left the barre for a
+        fingering of its own and back, and the note held 6 of its 18 frames."""
+        paired, j = [], 0
+        while j < len(rest):
+            (k, ms), nxt = rest[j], rest[j + 1] if j + 1 < len(rest) else None
+            if nxt is not None and nxt[0] == k and abs(nxt[1] - ms) == 1:
+                paired.append((k, -(PAIR + min(-ms, -nxt[1]))))
+                j += 2
+            else:
+                paired.append((k, ms))
+                j += 1
+        out = []
+        for units in ([paired] if paired != rest else []) + [rest]:
+            for chosen in itertools.combinations((1, 2, 3), len(units)):
+                stretch = sum(abs(k - low - f) for f, (k, _) in zip(chosen, units))
+                out.append((stretch + (units is rest), BARRE_POSITIONS + low,
+                            {0: (BARRE, low)} | {f: (-ms, k) for f, (k, ms) in zip(chosen, units)}))
+        return out
 
     def extend_barres(self, notes: Notes, out: list) -> None:
         """Version 12: a barre stays for the notes around it that it can play (no open string, every pressed fret
         within the barre's four; `barre_fingering` at its fret holds them), as a guitarist keeps a barre down over
-        a passage instead of moving the whole hand out of it and back for a note or two (in `out`, in place)."""
+        a passage instead of moving the whole hand out of it and back for a note or two (in `out`, in place).
+        Version 19 ends an extension before a note it would leave with a hand position change at each end
+        (`squeezes`)."""
         barres = [i for i, (p, _) in enumerate(out) if p is not None and p > BARRE_POSITIONS]
         for i in barres:
             low = fret_of(out[i][0])
             for step in (1, -1):
-                j = i + step
+                j, was = i + step, {}
                 while 0 <= j < notes.n and not (out[j][0] is not None and out[j][0] == out[i][0]):
                     before = next(((q, f) for q, f in reversed(out[:j]) if q is not None), None)
                     barre = self.barre_fingering(notes.left[j], before, low) if np.any(notes.left[j] > 0) else None
                     if barre is None:
                         break
-                    out[j] = barre
+                    was[j], out[j] = out[j], barre
                     j += step
+                while self.version >= 19 and was and self.squeezes(out, i, j, step, was):
+                    j -= step
+                    out[j] = was.pop(j)
+
+    @staticmethod
+    def squeezes(out: list, i: int, j: int, step: int, was: dict) -> bool:
+        """Version 19: does extending the barre of note i over the notes `was` (index: their own plan) save no hand
+        position change, and move one onto note j, the first it does not cover, which has one at its other end?
+        Kept through `sonata`'s `x 2 x x 3 3`, the barre left the next note, `x 3 x x 3 3` in position 1, between a
+        change from the barre and one to position 3: it held 10 of its 18 frames."""
+        n = len(out)
+        if not (0 <= j < n and 0 <= j + step < n) or out[j + step][0] == out[j][0]:
+            return False
+        old = [out[i][0]] + [q for q, _ in was.values()] + [out[j][0]]
+        return sum(a != b for a, b in zip(old, old[1:])) == 1
 
     def search_partial(self, p0: int, fingers0: dict, goal, before: tuple | None):
         """Where no fingering holds the whole note (version 5; `search_fingering` found none): of the cheapest
