@@ -175,6 +175,18 @@ def test_default_clips_load_and_stay_in_range():
     assert sum(p.stat().st_size for p in defaults.CLIPS_DIR.glob("*.npz")) < 400_000
 
 
+def test_default_clip_names_are_not_shadowed_by_folders(tmp_path, monkeypatch):
+    """`dexguitar sync` run where a folder `left/` exists (a run's stage folder) read that folder as the reference
+    motion, and failed; a file named `left` is still read as one."""
+    from dexguitar.motion import load_motion
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "left").mkdir()
+    np.testing.assert_array_equal(load_motion("left").qpos, defaults.default_motion("left").qpos)
+    (tmp_path / "right").write_text("not a motion")
+    with pytest.raises(MotionError, match="right"):
+        load_motion("right")
+
+
 def test_left_clip_presses_frets():
     import jax
     import jax.numpy as jnp

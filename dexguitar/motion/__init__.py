@@ -16,8 +16,9 @@ from dexguitar.motion.format import Motion, MotionError, load, resample, save, v
 
 
 def load_motion(source) -> Motion:
-    """A motion from "left" / "right" (the shipped defaults), a .npz / .json of ours, or the authors' JSON clip."""
-    if str(source) in defaults.CLIPS and not Path(str(source)).exists():
+    """A motion from "left" / "right" (the shipped defaults, unless a file of that name is in the working folder; a
+    folder of that name, such as a run's `left/`, is no motion), a .npz / .json of ours, or the authors' JSON clip."""
+    if str(source) in defaults.CLIPS and not Path(str(source)).is_file():
         return defaults.default_motion(str(source))
     if official.is_official_json(source):
         return official.read_official_json(source)
