@@ -800,7 +800,7 @@ class ScriptedLeft:
 
     def barre_others(self, rest: list, low: int) -> list:
         """Version 19: [(cost, barre position, fingers)] for the frets above a barre at `low` (`rest`: (fret,
-        -string), fret order), where the rule's fingers do not hold: any three of the other fingers in fret order,
+        -string), fret order), where the rule's fingers do not hold: any of the other three fingers, in fret order,
         two neighbouring strings at one fret also as one finger across them (`PAIR`). `sonata`'s `1 x x 3 3 1` under
         the barre of the notes beside it: ring and pinky on strings 3 and 2 at fret 3 pressed fret 1 on string 2
         (a pinky this short lies flat); the ring finger across both holds, where the hand had left the barre for a
