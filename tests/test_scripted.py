@@ -459,3 +459,20 @@ def test_version_19_keeps_the_barre_and_the_guide_finger():
     assert b18[2] == b19[2] == (1, {0: (1, 1), 1: (5, 1)})
     assert b18[3] == (1, {0: (5, 1), 2: (4, 3)}) and b19[3] == (1, {1: (5, 1), 2: (4, 3)})
     assert b18_held[2] <= 1 and b19_held[2] == 2
+
+
+def test_version_20_hammers_a_double_stop_on_a_frame_sooner():
+    """johnny_b_goodie, notes 4-10: `x x x x 5 5` then `x x x x 6 6` in 5-frame notes (which must hold 4 frames),
+    strings 1-2 under one finger each time (`PAIR`). The middle finger landing on fret 6 would change the note before,
+    so it lands after the boundary; in the song it pressed from frame 3 of 5, and the note held 3 (0.970 -> 1.000 with
+    version 20, scripted table). Version 20 lands such a hammered-on double stop one frame sooner (within what the
+    note before can spare): the same fingering, and here the second `6 6` holds both strings where it held one."""
+    from dexguitar.motion import feedforward as FF
+    goal = np.array([[0] * 6, [0, 8, 0, 0, 0, 0], [5, 5, 0, 0, 0, 0], [6, 6, 0, 0, 0, 0], [6, 6, 0, 0, 0, 0],
+                     [5, 5, 0, 0, 0, 0], [6, 6, 0, 0, 0, 0], [6, 6, 0, 0, 0, 0]])
+    onset = np.cumsum([0, 20, 10, 5, 5, 10, 5, 5, 10])
+    (plan19, held19), (plan20, held20) = FF.in_processes(
+        _one_thread_fingering_and_held, [(19, goal, onset), (20, goal, onset)])[0]
+    assert plan19 == plan20 and plan20[4:6] == [(5, {0: (PAIR, 5)}), (5, {1: (PAIR, 6)})]
+    assert held19[5] == 1 and held20[5] == 2
+    assert held20 == [1, 2, 2, 2, 2, 2, 2]

@@ -355,8 +355,10 @@ POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fi
 # 19 the fingers above a barre may be any of the other three, one of them across two neighbouring strings at one fret
 # (`ScriptedLeft.barre_others`), so a barre holds more of the notes around it; a barre is not kept over notes where
 # that leaves the next note with a hand position change at each end (`ScriptedLeft.squeezes`); and a finger that
-# presses a place in the note before keeps it in the same hand position (`ScriptedLeft.guided`).
-LATEST = 19
+# presses a place in the note before keeps it in the same hand position (`ScriptedLeft.guided`); 20 a finger landing
+# across two strings where the note before presses them lower (a double stop hammered on) lands a frame sooner, where
+# the note before can spare it (`ScriptedLeft.desired`).
+LATEST = 20
 PAIR = 10               # a finger pressing strings s and s + 1 (0-based) at one fret: "string" PAIR + s (version 7)
 BARRE = 20              # the index across all six strings at one fret: "string" BARRE (version 12)
 BARRE_POSITIONS = 100   # hand position BARRE_POSITIONS + k: the barre hand at fret k (`ScriptedLeft.barre_position`)
@@ -1029,6 +1031,8 @@ class ScriptedLeft:
                     s, k = b
                     D = land
                     t0 = tb - 1.5 - D if _harmless(goal_a, s, k) else tb + 1.0 - 0.6 * D
+                    if self.version >= 20 and PAIR <= s < BARRE and all(0 < goal_a[j] < k for j in strings_of(s)):
+                        t0 -= min(1, _spare(dur))       # a double stop hammered on: pressed a frame sooner
                 else:                                                   # hover somewhere else
                     D = land
                     t0 = tb - D
