@@ -707,16 +707,7 @@ class ScriptedLeft:
         across each such pair (`PAIR`; pairs taken from string 6 up), if it holds the whole note (`holds`); else
         None. It frees a finger for the rest of a chord (five or six pressed strings with four fingers) and lets a
         double stop move as one finger."""
-        units, s = [], N_STRINGS - 1
-        while s >= 0:
-            if goal[s] <= 0:
-                s -= 1
-            elif s > 0 and goal[s - 1] == goal[s]:
-                units.append((int(goal[s]), -(PAIR + s - 1)))
-                s -= 2
-            else:
-                units.append((int(goal[s]), -s))
-                s -= 1
+        units = _paired(sorted((int(goal[s]), -s) for s in range(N_STRINGS) if goal[s] > 0))
         if len(units) == int(np.sum(goal > 0)) or len(units) > 4:
             return None
         q, fingers = self.rule(sorted(units), p, planned)
@@ -807,16 +798,7 @@ class ScriptedLeft:
         the barre of the notes beside it: ring and pinky on strings 3 and 2 at fret 3 pressed fret 1 on string 2
         (a pinky this short lies flat); the ring finger across both holds, where the hand had left the barre for a
         fingering of its own and back, and the note held 6 of its 18 frames."""
-        paired, j = [], 0
-        while j < len(rest):
-            (k, ms), nxt = rest[j], rest[j + 1] if j + 1 < len(rest) else None
-            if nxt is not None and nxt[0] == k and abs(nxt[1] - ms) == 1:
-                paired.append((k, -(PAIR + min(-ms, -nxt[1]))))
-                j += 2
-            else:
-                paired.append((k, ms))
-                j += 1
-        out = []
+        paired, out = _paired(rest), []
         for units in ([paired] if paired != rest else []) + [rest]:
             for chosen in itertools.combinations((1, 2, 3), len(units)):
                 stretch = sum(abs(k - low - f) for f, (k, _) in zip(chosen, units))
@@ -1131,6 +1113,21 @@ def _by_fret(press: list, p: int, first: int = 0) -> dict:
         fingers[f] = (-ms, k)
         f_prev = f
     return fingers
+
+
+def _paired(press: list) -> list:
+    """The pressed (fret, -string) of `press` (fret order) with each two neighbouring strings at one fret as one unit,
+    (fret, -(PAIR + s)) for strings s and s + 1, taken from string 6 up (version 7)."""
+    out, j = [], 0
+    while j < len(press):
+        (k, ms), nxt = press[j], press[j + 1] if j + 1 < len(press) else None
+        if nxt is not None and nxt[0] == k and nxt[1] == ms + 1:
+            out.append((k, -(PAIR - nxt[1])))
+            j += 2
+        else:
+            out.append((k, ms))
+            j += 1
+    return out
 
 
 def _filled(plan: list) -> list:
