@@ -146,7 +146,7 @@ def _train(args) -> int:
     songs = _material(args, cfg.hand)
     motion = load_motion(args.motion or cfg.hand)
     if args.init_from:
-        check_init(args.init_from, cfg.hand, bool(env_cfg and env_cfg.feedforward),   # before building anything
+        check_init(args.init_from, cfg.hand, bool(env_cfg and (env_cfg.feedforward or env_cfg.right_feedforward)),
                    cfg.action_scale)
     trainer = Trainer(cfg, [TL.from_song(s) for s in songs], reference_frames(motion), env_cfg)
     print(f"training the {cfg.hand} hand on {len(songs)} song(s) with {cfg.num_envs} envs x {cfg.horizon} steps "
@@ -292,14 +292,17 @@ def _eval(args) -> int:
     return 0
 
 
-GENERAL = {"left": POLICIES / "left_general", "right": POLICIES / "right_mixed"}   # the general pair (issue 11)
+# The general pair (issue 11): both hands on their IK planners (zero residuals). `sync` takes `right_mixed`, a trained
+# right hand, instead: a synchronizer shifts a policy's latent, and a zero residual's output does not depend on it.
+GENERAL = {"left": POLICIES / "left_general", "right": POLICIES / "right_general"}
+SYNC_RIGHT = POLICIES / "right_mixed"
 
 
 def _general_pair(command: str) -> tuple[str, str]:
     if not (GENERAL["left"] / "policy.json").exists():
         raise UserError(f"{command}: no general left hand at {GENERAL['left']} (train one with "
                         "`make train-left-general`); give --left and --right")
-    return str(GENERAL["left"]), str(GENERAL["right"])
+    return str(GENERAL["left"]), str(SYNC_RIGHT if command == "sync" else GENERAL["right"])
 
 
 def gsync_for(song: str) -> Path | None:
@@ -432,8 +435,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("sync", help="synchronize a frozen left and right policy on songs (Sec. 4); resumable")
     p.add_argument("--song", nargs="+", help="tab files or embedded song names (taken from --out on --resume)")
     p.add_argument("--left", help="exported left-hand policy or run directory (taken from --out on --resume; "
-                                  "neither --left nor --right: the general pair, models/policies/left_general and "
-                                  "right_mixed)")
+                                  "neither --left nor --right: models/policies/left_general and right_mixed)")
     p.add_argument("--right", help="exported right-hand policy or run directory (taken from --out on --resume)")
     p.add_argument("--motion", help="left-hand reference motion for the discriminators (default: the shipped clip)")
     _add_run_args(p, "run directory (checkpoints, metrics.jsonl, policy/, eval.json)")
@@ -485,7 +487,7 @@ def build_parser() -> argparse.ArgumentParser:
                                     "report")
     p.add_argument("--ckpt", help="a synchronizer (`dexguitar sync` run or its policy/): both hands, synchronized "
                                   "(none of --ckpt/--left/--right: models/policies/gsync_<song> if shipped, else "
-                                  "the general pair unsynchronized)")
+                                  "the general pair on their planners, left_general and right_general)")
     p.add_argument("--left", help="left-hand policy (exported policy or run directory), without a synchronizer")
     p.add_argument("--right", help="right-hand policy")
     p.add_argument("--unsynchronized", action="store_true", help="with --ckpt: its frozen policies alone")

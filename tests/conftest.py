@@ -20,7 +20,8 @@ for flag in ("--xla_backend_optimization_level=0", "--xla_cpu_use_fusion_emitter
     if flag.split("=")[0] not in os.environ.get("XLA_FLAGS", ""):
         os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " " + flag).strip()
 
-CACHE = Path(os.environ.get("DEXGUITAR_TEST_CACHE", Path(__file__).resolve().parent.parent / ".cache" / "xla"))
+# an empty DEXGUITAR_TEST_CACHE is unset (not the working directory, which would fill with cache files)
+CACHE = Path(os.environ.get("DEXGUITAR_TEST_CACHE") or Path(__file__).resolve().parent.parent / ".cache" / "xla")
 jax.config.update("jax_compilation_cache_dir", str(CACHE))
 jax.config.update("jax_persistent_cache_min_compile_time_secs", 2.0)
 # the commands that tests call (`cli.main`) set their own cache from DEXGUITAR_CACHE: the same one

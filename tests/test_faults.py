@@ -259,9 +259,13 @@ def test_impossible_numbers_are_refused_by_the_parser(argv, capsys):
 def test_sync_and_play_without_policies_take_the_general_pair(tmp_path, monkeypatch, capsys):
     from dexguitar import cli
     from dexguitar.motion.planner import LATEST
+    from dexguitar.motion.planner import RIGHT_LATEST
     assert cli._general_pair("sync") == (str(cli.POLICIES / "left_general"), str(cli.POLICIES / "right_mixed"))
+    assert cli._general_pair("play") == (str(cli.POLICIES / "left_general"), str(cli.POLICIES / "right_general"))
     meta = json.loads((cli.POLICIES / "left_general" / "policy.json").read_text())
     assert meta["hand"] == "left" and meta["feedforward"] == LATEST        # a residual on the latest planner
+    meta = json.loads((cli.POLICIES / "right_general" / "policy.json").read_text())
+    assert meta["hand"] == "right" and meta["right_feedforward"] == RIGHT_LATEST
     monkeypatch.setitem(cli.GENERAL, "left", tmp_path / "none")          # a checkout without it
     for argv in (["sync", "--song", "ode_to_joy", "--out", str(tmp_path / "s")],
                  ["play", "--song", "ode_to_joy", "--out", str(tmp_path / "p")]):

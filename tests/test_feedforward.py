@@ -11,11 +11,12 @@ import pytest
 from dexguitar import envs
 from dexguitar.learn import policy as PO
 from dexguitar.motion import feedforward as FF
+from dexguitar.motion.planner import RIGHT_LATEST
 from dexguitar.perform.scripted import ScriptedPlayer
 from dexguitar.music import cursor as CU
 from dexguitar.music import timeline as TL
 from dexguitar.perform.evaluate import evaluate
-from test_scripted import MELODY, melody
+from test_scripted import MELODY, fast_lines, melody
 
 
 @pytest.fixture(scope="module")
@@ -30,8 +31,9 @@ def monkeypatch_module():
         yield mp
 
 
-def zero_residual(env) -> tuple[dict, PO.PolicySpec]:
-    spec = PO.PolicySpec("policy", "left", env.action_size, env.layout, feedforward=FF.LATEST)
+def zero_residual(env, hand: str = "left") -> tuple[dict, PO.PolicySpec]:
+    spec = PO.PolicySpec("policy", hand, env.action_size, env.layout, feedforward=FF.LATEST if hand == "left" else 0,
+                         right_feedforward=RIGHT_LATEST if hand == "right" else 0)
     params = PO.template(spec)
     params["obs_norm"]["var"] = np.ones_like(params["obs_norm"]["var"])
     return params, spec
@@ -48,12 +50,29 @@ def test_zero_residual_plays_as_the_scripted_player(plans):
     assert scripted["f1"] >= 0.95
 
 
-def test_window_starts_in_its_planned_state_and_reads_one_frame_per_step(plans):
-    config = envs.EnvConfig(feedforward=FF.LATEST, shift_prob=0.0, tempo_prob=0.0)
-    env = envs.make("left", FF.prepare(plans, config), config)
+def test_right_zero_residual_plays_as_the_scripted_player(plans):
+    """The right hand on its planner's feedforward (`EnvConfig.right_feedforward`), on 8-frame string crossings that
+    `right_mixed` and version 1 of the planner miss."""
+    song = fast_lines()
+    config = envs.EnvConfig().evaluation()
+    scripted = ScriptedPlayer(envs.make("right", [TL.from_song(song)], config)).play(0)["right"]
+    params, spec = zero_residual(envs.make("right", [TL.from_song(song)], config).env, "right")
+    assert spec.env_config(config).right_feedforward == RIGHT_LATEST and not spec.env_config(config).feedforward
+    played = evaluate(params, spec, [song])["fast lines"]["summary"]["right"]
+    assert played["notes"] == len(song.notes)
+    assert played["f1"] == pytest.approx(scripted["f1"], abs=1e-6)
+    assert scripted["f1"] >= 0.95
+
+
+@pytest.mark.parametrize("hand", ["left", "right"])
+def test_window_starts_in_its_planned_state_and_reads_one_frame_per_step(plans, hand):
+    ff = {"feedforward": FF.LATEST} if hand == "left" else {"right_feedforward": RIGHT_LATEST}
+    config = envs.EnvConfig(shift_prob=0.0, tempo_prob=0.0, **ff)
+    env = envs.make(hand, FF.prepare(plans, config), config)
     core = env.env.env                                  # AutoReset(ChainWindows(LeftEnv))
-    assert core.planned
-    plan = core.songs.plan
+    assert core.planned and list(core.plans) == [hand]
+    plan = core.songs.plan if hand == "left" else core.songs.plan_right
+    assert (core.songs.plan is None) == (hand == "right")        # only the plan the config asks for is made
     j = np.asarray(core.hands[0].qpos)
     reset, step, feedforward = jax.jit(env.reset), jax.jit(env.step), jax.jit(core.feedforward)
     for seed in range(3):
@@ -115,3 +134,13 @@ def test_the_residual_flag_travels_with_the_policy():
         envs.make("right", [TL.from_song(melody())], envs.EnvConfig(feedforward=True))
     with pytest.raises(ValueError, match="feedforward.prepare"):        # plans are not made behind the env's back
         envs.make("left", [TL.from_song(melody())], envs.EnvConfig(feedforward=True))
+    right = envs.make("right", [TL.from_song(melody())], envs.EnvConfig())
+    _, rspec = zero_residual(right.env, "right")
+    again = PO.PolicySpec.from_meta(rspec.to_meta())
+    assert again.right_feedforward == RIGHT_LATEST and not again.feedforward
+    assert again.env_config(envs.EnvConfig(feedforward=FF.LATEST)) == envs.EnvConfig(right_feedforward=RIGHT_LATEST)
+    assert "right_feedforward" not in spec.to_meta()
+    with pytest.raises(ValueError, match="no right hand"):
+        envs.make("left", [TL.from_song(melody())], envs.EnvConfig(right_feedforward=RIGHT_LATEST))
+    with pytest.raises(ValueError, match="feedforward.prepare"):
+        envs.make("right", [TL.from_song(melody())], envs.EnvConfig(right_feedforward=RIGHT_LATEST))

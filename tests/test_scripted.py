@@ -1,5 +1,7 @@
 """The scripted player through the envs: hand-made motions that put fingertips on the press targets and sweep the pick
 across the target strings must score F1 ~ 1, or geometry, detection, bookkeeping and metrics disagree somewhere."""
+import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
@@ -8,6 +10,7 @@ from dexguitar.motion.planner import BARRE, FINGER_DOFS, PAIR, Notes, ScriptedLe
 from dexguitar.perform.scripted import ScriptedPlayer
 from dexguitar.music import timeline as TL
 from dexguitar.music.song import Song, make_note
+from dexguitar.world import detect
 
 # (string, fret) single notes in first position: open strings, same-string steps up and down, string changes,
 # strings 1 to 6. An open string first: from the home pose (hand at fret 5) the hand needs ~10 frames to get there.
@@ -60,13 +63,51 @@ def test_fingering_one_finger_per_fret(timeline):
 
 
 def test_pick_strokes_alternate_on_one_string(timeline):
-    right = ScriptedRight()
     notes = Notes(np.asarray(timeline.left), np.asarray(timeline.pick), np.asarray(timeline.onset))
-    segs, _ = right.strokes(notes)
+    segs, _ = ScriptedRight(1).strokes(notes)
     strokes = [np.sign(x1 - x0) for _, _, x0, x1, kind in segs if kind[0] == "stroke"]
-    assert len(strokes) == len(MELODY)
-    # notes 4-6 repeat string 1: down, up, down (or the reverse)
-    assert strokes[4] == -strokes[5] == strokes[6]
+    sweeps = [np.sign(s.end - s.start) for s in ScriptedRight(2).sweeps(notes)[0]]
+    for way in (strokes, sweeps):
+        assert len(way) == len(MELODY)
+        # notes 4-6 repeat string 1: down, up, down (or the reverse)
+        assert way[4] == -way[5] == way[6]
+
+
+def fast_lines() -> Song:
+    """8-frame notes (sixteenths at 112.5 BPM): a string-crossing figure as in `capriccio_op59_no16`, a tremolo on
+    one string, and an arpeggio from string 6 up to 2 and back to 4, as in `prelude1_in_c_major_chords`."""
+    def single(string):
+        frets = [-1] * 6
+        frets[string - 1] = 0
+        return make_note("1/16", frets)
+    strings = [3, 2, 3, 1, 3, 2, 3, 4] * 2 + [2] * 8 + [6, 5, 4, 3, 2, 4, 3, 2]
+    return Song(tempo=112.5, notes=tuple(single(s) for s in strings), title="fast lines")
+
+
+def planned_crossings(right: ScriptedRight, tl) -> tuple[np.ndarray, Notes]:
+    """(n, 6) times each string is crossed below string height (1 mm, as in training) by the planned pick path
+    within each note, by the env's detection on the path's straight steps."""
+    n = int(tl.n_notes)
+    notes = Notes(np.asarray(tl.left)[:n], np.asarray(tl.pick)[:n], np.asarray(tl.onset)[:n + 1])
+    path = jnp.asarray(right.pick_path(notes), jnp.float32)
+    picked = np.asarray(jax.vmap(lambda a, b: detect.pick_crossings(a, b, depth=0.001).picked)(path[:-1], path[1:]))
+    return np.stack([picked[a:b].sum(0) for a, b in zip(notes.onset[:-1], notes.onset[1:])]), notes
+
+
+@pytest.mark.filterwarnings("ignore:note .* the pick cannot reach")
+def test_version_2_picks_fast_lines_note_by_note():
+    tl = TL.from_song(fast_lines())
+    assert set(np.diff(np.asarray(tl.onset)[:int(tl.n_notes) + 1])) == {8}
+    counts, notes = planned_crossings(ScriptedRight(2), tl)
+    np.testing.assert_array_equal(counts, notes.pick)          # each note's string once, and no other string
+    old, _ = planned_crossings(ScriptedRight(1), tl)           # version 1: strokes + travels did not fit 8 frames
+    assert (old != notes.pick).any(axis=1).sum() >= 20
+    env = envs.make("right", [tl], envs.EnvConfig().evaluation())
+    player = ScriptedPlayer(env)
+    assert player.right.version == 2
+    assert player.play(0)["right"]["f1"] >= 0.95                # and the simulated hand follows it
+    player.right = ScriptedRight(1)
+    assert player.play(0)["right"]["f1"] < 0.5                  # 0.22 measured
 
 
 def tracked_presses(hand, notes) -> np.ndarray:

@@ -25,6 +25,12 @@ def make(hand: str, songs, config: EnvConfig | None = None, backend: str = "jax"
     if config.feedforward and songs.plan is None:
         raise ValueError("EnvConfig.feedforward needs the planner's motion of the songs: "
                          "dexguitar.motion.feedforward.prepare(songs, config)")
+    if config.right_feedforward and "right" not in ENVS[hand].roles:
+        raise ValueError(f"EnvConfig.right_feedforward is the right hand's planned motion; the {hand} env has no "
+                         "right hand")
+    if config.right_feedforward and songs.plan_right is None:
+        raise ValueError("EnvConfig.right_feedforward needs the right planner's motion of the songs: "
+                         "dexguitar.motion.feedforward.prepare(songs, config)")
     env = ENVS[hand](songs, config, backend)
     return PlayThrough(env) if config.sequential else AutoReset(ChainWindows(env))
 

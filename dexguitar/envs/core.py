@@ -65,6 +65,7 @@ class EnvConfig:
     mirror: bool = False                 # the left-handed player's scene
     feedforward: int = 0                 # the left action is a residual on the planner's (`motion.feedforward`)
                                          # of this version (`motion.planner.LATEST`; True = 1); 0: none
+    right_feedforward: int = 0           # the right action likewise, on the right planner's (`planner.RIGHT_LATEST`)
 
     def evaluation(self) -> "EnvConfig":
         return dataclasses.replace(self, sequential=True, shift_prob=0.0, tempo_prob=0.0, pick_depth=0.0,
@@ -258,8 +259,8 @@ class GuitarEnv:
         k_win, k_noise, k_next = jax.random.split(key, 3)
         window = self.sample_window(k_win, song)
         home, qvel = self._home, jnp.zeros_like(self._data0.qvel)
-        if self.planned:      # the planned state of the window's first frame (reference state initialization)
-            plan, j = self.songs.plan, jnp.asarray(self.hands[self.roles.index("left")].qpos)
+        for role, plan in self.plans.items():   # the planned state of the window's first frame (reference state init)
+            j = jnp.asarray(self.hands[self.roles.index(role)].qpos)
             f = jnp.clip(window.start, 0, plan.frames[window.song] - 1)
             home, qvel = home.at[j].set(plan.qpos[window.song, f]), qvel.at[j].set(plan.qvel[window.song, f])
         # a planned hand starts exactly on its plan: 2 cm of wrist noise mid-song cost the planner a fifth of its F1
@@ -341,19 +342,26 @@ class GuitarEnv:
                              terminated=terminated, lifetime=lifetime, info=info)
 
     @property
+    def plans(self) -> dict:
+        """{role: `Plan`} of the hands that act on top of a planner's feedforward (the songs' plans of this env's
+        roles)."""
+        found = {"left": self.songs.plan, "right": self.songs.plan_right}
+        return {r: found[r] for r in self.roles if found[r] is not None}
+
+    @property
     def planned(self) -> bool:
-        """Does the left hand act on top of the planner's feedforward (songs with a `Plan`)?"""
-        return self.songs.plan is not None
+        """Does a hand act on top of a planner's feedforward?"""
+        return bool(self.plans)
 
     def feedforward(self, cursor: CU.Cursor):
-        """(action_size,) the planner's action of the cursor's song frame in the left hand's slice; zeros without
-        a plan."""
-        if not self.planned:
-            return jnp.zeros(self.action_size)
-        plan, song = self.songs.plan, cursor.window.song
-        ff = plan.action[song, jnp.clip(CU.song_frame(cursor), 0, plan.frames[song] - 1)]
-        i = self.roles.index("left") * H.N_DOF
-        return jnp.zeros(self.action_size).at[i:i + H.N_DOF].set(ff)
+        """(action_size,) the planners' actions of the cursor's song frame in their hands' slices; zeros where a
+        hand has no plan."""
+        out, song = jnp.zeros(self.action_size), cursor.window.song
+        for role, plan in self.plans.items():
+            ff = plan.action[song, jnp.clip(CU.song_frame(cursor), 0, plan.frames[song] - 1)]
+            i = self.roles.index(role) * H.N_DOF
+            out = out.at[i:i + H.N_DOF].set(ff)
+        return out
 
     @property
     def picks(self) -> bool:

@@ -41,17 +41,19 @@ class PolicySpec:
     layout: ObsLayout
     feedforward: int = 0      # the left hand's action is a residual on the planner's of this version (0: none)
     scale: float = 1.0        # the left hand's network output times this (`networks.Policy.scale`)
+    right_feedforward: int = 0    # the right hand's action is a residual on the right planner's of this version
 
     def hand_spec(self, i: int) -> "PolicySpec":
         """The single-hand policy of hand i of a synchronizer."""
         role = self.layout.roles[i]
         left = role == "left"
         return PolicySpec("policy", role, self.action_size // self.layout.hands, self.layout.one_hand(i),
-                          self.feedforward if left else 0, self.scale if left else 1.0)
+                          self.feedforward if left else 0, self.scale if left else 1.0,
+                          0 if left else self.right_feedforward)
 
     def env_config(self, config):
-        """`config` (an `EnvConfig`) as this policy must be played in: on the planner's feedforward or not."""
-        return dataclasses.replace(config, feedforward=self.feedforward)
+        """`config` (an `EnvConfig`) as this policy must be played in: on the planners' feedforwards or not."""
+        return dataclasses.replace(config, feedforward=self.feedforward, right_feedforward=self.right_feedforward)
 
     def to_meta(self) -> dict:
         meta = {"kind": self.kind, "hand": self.hand, "action_size": self.action_size,
@@ -60,6 +62,8 @@ class PolicySpec:
             meta["feedforward"] = int(self.feedforward)
         if self.scale != 1.0:
             meta["scale"] = float(self.scale)
+        if self.right_feedforward:
+            meta["right_feedforward"] = int(self.right_feedforward)
         return meta
 
     @classmethod
@@ -72,7 +76,7 @@ class PolicySpec:
             layout = ObsLayout(roles, 2, (meta["obs_size"] - meta["goal_size"]) // (2 * len(roles)), goal, 6)
         return cls(meta.get("kind", "policy"), meta["hand"], meta["action_size"], layout,
                    int(meta.get("feedforward", 0)),         # true (the first residuals) = version 1
-                   float(meta.get("scale", 1.0)))
+                   float(meta.get("scale", 1.0)), int(meta.get("right_feedforward", 0)))
 
 
 # ----------------------------------------------------------------------------------------------------- acting

@@ -190,12 +190,13 @@ def check_init(init_from, hand: str, feedforward: int, scale: float = 1.0) -> di
     if meta.get("hand") != hand or meta.get("kind", "policy") != "policy":
         raise UserError(f"--init-from {init_from}: a {meta.get('hand')} hand {meta.get('kind', 'policy')}, not a "
                         f"{hand} hand policy")
-    residual, feedforward = bool(PO.PolicySpec.from_meta(meta).feedforward), bool(feedforward)
+    spec = PO.PolicySpec.from_meta(meta)
+    residual, feedforward = bool(spec.feedforward or spec.right_feedforward), bool(feedforward)
     if residual != feedforward:
         what = {True: "a residual on the IK planner", False: "a plain policy"}
         raise UserError(f"--init-from {init_from}: {what[residual]}, but this run's ENV trains {what[feedforward]} "
                         "(EnvConfig.feedforward)")
-    theirs = PO.PolicySpec.from_meta(meta).scale
+    theirs = spec.scale
     if theirs != scale:
         raise UserError(f"--init-from {init_from}: its actions are scaled by {theirs}, but this run's "
                         f"TrainConfig.action_scale is {scale}")
@@ -240,7 +241,8 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
             log(f"resumed {run.path} at iteration {step} from its compact state (envs, replay buffers and Adam "
                 "start afresh)")
         elif init_from:
-            meta_init = check_init(init_from, cfg.hand, trainer.env.config.feedforward, cfg.action_scale)
+            meta_init = check_init(init_from, cfg.hand, trainer.env.config.feedforward
+                                   or trainer.env.config.right_feedforward, cfg.action_scale)
             params = PO.load(init_from)[0]
             state = state.replace(params=dict(state.params, policy=params["policy"]), obs_norm=params["obs_norm"])
             log(f"policy initialized from {init_from} ({meta_init.get('samples', 0):,} samples)")

@@ -38,7 +38,8 @@ class SyncTrainer(Trainer):
         if config.hand != "duet":
             config = dataclasses.replace(config, hand="duet")
         self.left_spec = PolicySpec.from_meta(left[1])                                 # read by make_spec
-        env_config = self.left_spec.env_config(env_config or SYNC_ENV)                 # a residual left hand
+        env_config = dataclasses.replace(env_config or SYNC_ENV, feedforward=self.left_spec.feedforward,
+                                         right_feedforward=PolicySpec.from_meta(right[1]).right_feedforward)
         super().__init__(config, songs, reference, env_config)
         check_pair(left[1], right[1], self.layout, where=(left[1].get("path", "LEFT"), right[1].get("path",
                                                                                                     "RIGHT")))
@@ -47,7 +48,7 @@ class SyncTrainer(Trainer):
 
     def make_spec(self) -> PolicySpec:
         return PolicySpec("synchronizer", "duet", self.env.action_size, self.layout, self.env.config.feedforward,
-                          self.left_spec.scale)
+                          self.left_spec.scale, self.env.config.right_feedforward)
 
     def init_inputs(self) -> dict:
         return dict(super().init_inputs(), frozen=self.frozen)   # arguments of `init`: one program for any pair

@@ -178,7 +178,7 @@ class Trainer:
 
     def make_spec(self) -> PolicySpec:
         return PolicySpec("policy", self.config.hand, self.env.action_size, self.layout,
-                          self.env.config.feedforward, self.config.action_scale)
+                          self.env.config.feedforward, self.config.action_scale, self.env.config.right_feedforward)
 
     # ------------------------------------------------------------------------------------------ init
     def init(self, key=None) -> TrainState:
@@ -230,7 +230,7 @@ class Trainer:
         """(trainable policy parameters, observation normalizer, frozen parameters or None); `inputs`: `init`'s."""
         policy = N.Policy(self.env.action_size, self.config.log_std_init, self.config.action_scale)
         params = N.init_params(policy, key, (self.layout.history, self.layout.frame_size), (self.layout.goal_size,))
-        if self.env.config.feedforward:   # a residual starts at exactly zero (the planner), not at +-0.03
+        if self.env.config.feedforward or self.env.config.right_feedforward:   # a residual starts at exactly zero
             mu = dict(params["params"]["mu"], kernel=jnp.zeros_like(params["params"]["mu"]["kernel"]))
             params = {**params, "params": {**params["params"], "mu": mu}}
         return params, N.normalizer_init(self.layout.frame_size), None

@@ -1,4 +1,4 @@
-"""The planner's motion of a whole song, as a feedforward that a residual left-hand policy corrects.
+"""The planner's motion of a whole song, as a feedforward that a residual policy corrects (left hand; right hand too).
 
 Why: the IK planner (`motion.planner`, no learning) plays the authors' songs at a mean left F1 of 0.87
 (results/scripted_official.md), while PPO from the home pose needs minutes per song and 2e8 samples for a general hand
@@ -11,6 +11,11 @@ A `Plan` lives in `Timeline.plan` (song-frame indexed: frame 0 is the grace rest
 sequential window), so it travels with the songs into every jitted program as an argument. Planning takes seconds per
 song on one CPU core; `attach` plans in parallel processes and keeps each plan in a disk cache keyed by the song's
 notes and timing and the planner's version (`planner.LATEST`; a residual policy keeps the version it was trained on).
+
+The right hand works the same way (`EnvConfig(right_feedforward=planner.RIGHT_LATEST)`, `Timeline.plan_right`): its
+planner plays the 15 official songs at right F1 0.986-1.000 where `right_mixed`, trained on picking patterns, plays
+0.70-0.95. Alone its plan depends on the picked strings and onsets; in the duet it also waits, note by note, for the
+left hand's plan to hold the note (`left_plans`).
 """
 from __future__ import annotations
 
@@ -27,7 +32,7 @@ import jax
 import numpy as np
 from flax import struct
 
-from dexguitar.motion.planner import LATEST, Notes, ScriptedLeft, Tracker   # LATEST: `EnvConfig.feedforward`
+from dexguitar.motion.planner import LATEST, Notes, ScriptedLeft, ScriptedRight, Tracker
 from dexguitar.world import hands as H
 from dexguitar.world import scene
 
@@ -48,9 +53,14 @@ def cache_dir() -> Path:
     return Path(os.environ.get("DEXGUITAR_PLANS", Path.home() / ".cache" / "dexguitar" / "plans"))
 
 
-def _job_key(left, onset, version: int) -> str:
-    h = hashlib.sha256(f"v{version}".encode())
-    h.update(np.ascontiguousarray(left, np.int32).tobytes())
+def _job_key(left, onset, version: int, hand: str = "left", pick=None, after: int = 0) -> str:
+    """A plan's cache key: the left hand's plan depends on the left goals and onsets, the right hand's on the picked
+    strings and onsets, and where it waits for the left hand's plan (`after`: its version), on that plan too."""
+    h = hashlib.sha256(f"v{version}".encode() if hand == "left" else f"right-v{version}-after-{after}".encode())
+    if hand == "right":
+        h.update(np.ascontiguousarray(pick, np.int32).tobytes())
+    if hand == "left" or after:
+        h.update(np.ascontiguousarray(left, np.int32).tobytes())
     h.update(np.ascontiguousarray(onset, np.int64).tobytes())
     return h.hexdigest()[:24]
 
@@ -59,16 +69,30 @@ _PLANNERS: dict = {}
 
 
 def plan_notes(job) -> tuple[np.ndarray, np.ndarray]:
-    """(action (T, 27), qpos (T + 1, 27)) of the left planner of a version for one `Notes` (left, pick, onset,
-    version), from the home pose. Runs in a worker process, which keeps its planner and IK caches between songs."""
-    left, pick, onset, version = job
-    if version not in _PLANNERS:
-        _PLANNERS[version] = (ScriptedLeft(version), Tracker("left"))
-    hand, tracker = _PLANNERS[version]
+    """(action (T, 27), qpos (T + 1, 27)) of a hand's planner of a version for one `Notes` (left, pick, onset,
+    version[, hand: "left" (default) or "right"]), from the home pose. Runs in a worker process, which keeps its
+    planner and IK caches between songs."""
+    left, pick, onset, version, *rest = job
+    role = rest[0] if rest else "left"
+    after = rest[1] if len(rest) > 1 else None       # the right hand waits for this tracked left plan (qpos)
+    hand, tracker = _planner(role, version)
+    notes = Notes(left, pick, onset)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        ctrl, q = tracker.track(hand.desired(Notes(left, pick, onset)))
+        if role == "left":
+            desired = hand.desired(notes)
+        else:
+            earliest = None if after is None else _planner("left", LATEST)[0].ready_steps(notes, after)
+            desired = hand.desired(notes, earliest)
+        ctrl, q = tracker.track(desired)
     return np.clip(tracker.to_action(ctrl), -1.0, 1.0).astype(np.float32), q.astype(np.float32)
+
+
+def _planner(role: str, version: int):
+    """(planner, tracker) of a hand and version, made once per process."""
+    if (role, version) not in _PLANNERS:
+        _PLANNERS[role, version] = (ScriptedLeft(version) if role == "left" else ScriptedRight(version), Tracker(role))
+    return _PLANNERS[role, version]
 
 
 def in_processes(fn, jobs, workers: int = 0) -> tuple[list, int]:
@@ -118,12 +142,16 @@ def song_notes(songs, i: int, rest_frames: int):
     return Notes(left, pick, np.concatenate([[0], onset]))
 
 
-def plan_songs(songs, rest_frames: int = 5, workers: int = 0, log=None, version: int = LATEST):
-    """(keys, {key: (action, qpos)}): the plan of each song of a batch by the planner of `version` (key None: an
-    empty song), from the disk cache where it was made before, else made now (all in one pool) and cached."""
+def plan_songs(songs, rest_frames: int = 5, workers: int = 0, log=None, version: int = LATEST, hand: str = "left",
+               after: tuple | None = None):
+    """(keys, {key: (action, qpos)}): the plan of each song of a batch by `hand`'s planner of `version` (key None: an
+    empty song), from the disk cache where it was made before, else made now (all in one pool) and cached.
+    after: (left planner version, per song its tracked plan's qpos): the right hand crosses each note's strings only
+    once that left hand holds the note (`left_plans`)."""
     S = int(np.shape(songs.n_notes)[0])
     notes = [song_notes(songs, i, rest_frames) if int(songs.n_notes[i]) > 0 else None for i in range(S)]
-    keys = [_job_key(n.left, n.onset, version) if n is not None else None for n in notes]
+    after_version, left_q = after if after is not None else (0, [None] * S)
+    keys = [_job_key(n.left, n.onset, version, hand, n.pick, after_version) if n is not None else None for n in notes]
     cache = cache_dir()
     found = {}
     for k in set(filter(None, keys)):
@@ -133,8 +161,9 @@ def plan_songs(songs, rest_frames: int = 5, workers: int = 0, log=None, version:
                 found[k] = (z["action"], z["qpos"])
     todo = sorted({k for k in keys if k is not None and k not in found})
     if todo:
-        jobs = {k: notes[keys.index(k)] for k in todo}
-        made = plan_all([(n.left, n.pick, n.onset, version) for n in jobs.values()], workers, log)
+        jobs = {k: keys.index(k) for k in todo}
+        made = plan_all([(notes[i].left, notes[i].pick, notes[i].onset, version, hand, left_q[i])
+                         for i in jobs.values()], workers, log)
         cache.mkdir(parents=True, exist_ok=True)
         for k, (a, q) in zip(todo, made):
             found[k] = (a, q)
@@ -144,17 +173,18 @@ def plan_songs(songs, rest_frames: int = 5, workers: int = 0, log=None, version:
     return keys, found
 
 
-def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, log=None, version: int = LATEST):
-    """The song batch (`timeline.batch`/`stack`) with a `Plan` per song by the planner of `version` (`plan_songs`);
-    empty songs get a plan of the home pose."""
+def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, log=None, version: int = LATEST,
+           hand: str = "left", after: tuple | None = None):
+    """The song batch (`timeline.batch`/`stack`) with a `Plan` per song by `hand`'s planner of `version`
+    (`plan_songs`), as `plan` (left) or `plan_right`; empty songs get a plan of the home pose."""
     from dexguitar.music.timeline import capacity
-    keys, found = plan_songs(songs, rest_frames, workers, log, version)
+    keys, found = plan_songs(songs, rest_frames, workers, log, version, hand, after)
     F = capacity(max((len(found[k][0]) for k in found), default=1), MIN_FRAMES)
-    flip = H.mirror_qpos(np.ones(H.N_DOF), "left") if mirror else np.ones(H.N_DOF, np.float32)
+    flip = H.mirror_qpos(np.ones(H.N_DOF), hand) if mirror else np.ones(H.N_DOF, np.float32)
     act, qpos, qvel, frames = [], [], [], []
     for k in keys:
         if k is None:
-            a, q = np.zeros((1, H.N_DOF), np.float32), _home_qpos()[None]
+            a, q = np.zeros((1, H.N_DOF), np.float32), _home_qpos(hand)[None]
             q = np.concatenate([q, q])
         else:
             a, q = found[k]
@@ -170,17 +200,30 @@ def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, 
                 qpos=jax.device_put(np.stack(qpos).astype(np.float32)),
                 qvel=jax.device_put(np.stack(qvel).astype(np.float32)),
                 frames=jax.device_put(np.asarray(frames, np.int32)))
-    return songs.replace(plan=plan)
+    return songs.replace(plan=plan) if hand == "left" else songs.replace(plan_right=plan)
 
 
 def prepare(songs, config):
     """Songs (a list of `Song`s or timelines, or a batch) as an env of `config` (an `EnvConfig` or None) reads them:
-    stacked, with the plans attached where `config.feedforward` asks for them."""
+    stacked, with the plans attached where `config.feedforward` or `config.right_feedforward` asks for them."""
     from dexguitar.envs import as_batch
     songs = as_batch(songs)
     if config is not None and config.feedforward and songs.plan is None:
         songs = attach(songs, config.rest_frames, config.mirror, version=int(config.feedforward))
+    if config is not None and config.right_feedforward and songs.plan_right is None:
+        songs = attach(songs, config.rest_frames, config.mirror, version=int(config.right_feedforward), hand="right",
+                       after=left_plans(songs, config))
     return songs
+
+
+def left_plans(songs, config) -> tuple | None:
+    """Where both hands play on their planners (the duet): (left planner version, per song the tracked left plan's
+    qpos), which the right hand's plan waits for, note by note, as the paper's strict gate asks (a string picked
+    before the left hand holds the note is wrong); else None. The left plans come from the disk cache."""
+    if not (config.feedforward and config.right_feedforward):
+        return None
+    keys, found = plan_songs(songs, config.rest_frames, version=int(config.feedforward))
+    return int(config.feedforward), [found[k][1] if k is not None else None for k in keys]
 
 
 def _extend(x: np.ndarray, frames: int) -> np.ndarray:
@@ -189,5 +232,5 @@ def _extend(x: np.ndarray, frames: int) -> np.ndarray:
     return np.concatenate([x, np.repeat(x[-1:], frames - len(x), 0)])
 
 
-def _home_qpos() -> np.ndarray:
-    return np.asarray(scene.home_qpos("left"), np.float32)
+def _home_qpos(hand: str = "left") -> np.ndarray:
+    return np.asarray(scene.home_qpos(hand), np.float32)

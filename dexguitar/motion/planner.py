@@ -11,10 +11,10 @@ How it plays, per hand, before the rollout (`perform.scripted.ScriptedPlayer.pla
    target strings get a fingertip on p_{i,k} resting on the fretboard, the other fingers hover 10 mm above the
    strings (version 2 on: where that fingering does not hold a note in a short simulated trial, the cheapest
    other one that does; version 7 on: one finger across two neighbouring strings at one fret; version 12 on: the
-   index barred across all six strings, in a hand pose of its own). Right hand: the
-   pick sweeps from the gap before the first target string to the gap after the last, 3 mm below string height,
-   choosing the stroke direction that starts where the last one ended (alternate picking on one string), and hovers
-   6 mm above the strings in between.
+   index barred across all six strings, in a hand pose of its own). Right hand (version 2): the pick stays 3 mm below
+   string height and sweeps from the gap before each note's first target string to the gap after its last, the
+   directions chosen over the whole song (alternate picking on one string, a sweep on to the next string), lifted
+   4 mm above the strings only over a string it passes without picking it.
 2. Joint targets by least squares on MuJoCo C kinematics (`motion.kinematics.HandKinematics`; cached per keyframe,
    warm-started), joined by minimum-jerk interpolation with per-finger timing that anticipates the onset wherever
    an early press cannot spoil the previous note.
@@ -22,7 +22,9 @@ How it plays, per hand, before the rollout (`perform.scripted.ScriptedPlayer.pla
    trajectory is turned into PD targets by a one-step inverse model, computed by finite differences with
    `mujoco.rollout` on the same model the env uses. The result is an open-loop action sequence for the env.
 4. Both hands (duet): the left hand is planned and simulated first; the right hand crosses each note's strings only
-   once the simulated left hand holds the note (the duet's strict gate counts earlier picks as wrong).
+   once the simulated left hand holds the note (the duet's strict gate counts earlier picks as wrong), and as soon as
+   it does (both-hands F1 counts the hold for 2/3 of the note from the pick). The envs play the same plans as
+   feedforwards (`motion.feedforward`, `EnvConfig.feedforward` and `right_feedforward`).
 `perform.scripted.ScriptedPlayer.play` rolls the MJX env with those actions (vmapped over songs) and reads the
 per-note scores from `State.info`.
 """
@@ -180,6 +182,41 @@ def _clearance(a0, a1, b0, b1, n=9):
 
 # ------------------------------------------------------------------------------------------------- right hand
 
+# Versions of the right hand's plans (`EnvConfig.right_feedforward`): 1 a stroke of 8 frames (+2 per extra string)
+# across each note's strings, gap to gap, with a travel at hover height of at least 3 frames between strokes that do
+# not start where the last one ended (notes of 8 frames or less that change strings come late or not at all); 2 the
+# pick stays below the strings and sweeps from crossing to crossing, each stroke's direction chosen over the whole
+# song (`ScriptedRight.directions`: alternate on one string, sweep on to the next one, few strings passed over), the
+# stroke shortened to the time between its neighbours, lifted only over a string it passes, and a crossing after a long
+# travel later in its note (`ScriptedRight.sweeps`); a strum over more strings is quicker, and in the duet each note's
+# first string is crossed as soon as the simulated left hand holds the note (`ready_lag`).
+RIGHT_LATEST = 2
+
+
+@dataclasses.dataclass
+class Sweep:
+    """One note's stroke in version 2: the pick moves from `start` to `end` (string coordinates: string i, 0-based,
+    at i; the gaps at i +- 0.5) in `frames` control steps, crossing its first string at step `cross` (a fraction
+    `tau` of the way)."""
+
+    note: int
+    start: float
+    end: float
+    cross: float
+    tau: float
+    frames: float
+    strings: int
+    note_end: int
+
+    @property
+    def t0(self) -> float:
+        return self.cross - self.tau * self.frames
+
+    @property
+    def t1(self) -> float:
+        return self.t0 + self.frames
+
+
 class ScriptedRight:
     """The picking hand: the pick point follows strokes across the target strings, found by damped least squares
     on the wrist (slides penalised: they are slow) with the fingers kept in the home grip."""
@@ -190,8 +227,23 @@ class ScriptedRight:
     low_apex = 0.0025      # between strokes less than 2 frames apart (no time to rise to `hover`)
     stroke_frames = 8      # one string; +2 per extra string
     cross_frame = 2        # the (first) string is crossed during this step of the note
+    # version 2
+    lift = 0.004           # above string height while passing over a string that is not picked
+    sweep_cross = 1        # a note's (first) string is crossed during this step of the note at the earliest ...
+    ready_lag = 0          # ... and in the duet this many steps after the first step that ends with the note held
+    sweep_frames = 8.0     # the longest stroke over one string, gap to gap; +`sweep_extra` per extra string: a strum
+    sweep_extra = -0.5     # is quicker, so that its last string is picked early enough to be held 2/3 of the note
+    half_min = 1.0         # a stroke takes at least this long on either side of its crossing
+    travel_min = 1.5       # a travel between strokes takes at least this long ...
+    travel_rate = 1.2      # ... and this many steps per string spacing (the simulated pick follows ~1 per step)
+    spare = 1.0            # what a travel leaves free around it before its crossing is moved later
+    max_delay = 2.0        # the most a crossing moves later in its note
+    lift_cost = 1.0        # `directions`: a string passed over costs as much as moving one spacing more
 
-    def __init__(self):
+    def __init__(self, version: int = RIGHT_LATEST):
+        if not 1 <= version <= RIGHT_LATEST:
+            raise ValueError(f"no right planner version {version} (1..{RIGHT_LATEST})")
+        self.version = version
         self.guitar = GUITAR
         self.kin = HandKinematics("right")
         self.kin.set(self.kin.home)
@@ -205,6 +257,9 @@ class ScriptedRight:
                                     [self.xs[-1] - sign * gap / 2]])
         self.active = np.arange(6)                       # wrist slides and hinges move, fingers hold the pick
         self.weights = np.array([0.03, 0.03, 0.03, 0.001, 0.001, 0.001])   # per m, per rad
+        # string coordinates (version 2): sigma -0.5, 0, 0.5, ..., 5.5 at the gaps and strings
+        self._sig = np.arange(-0.5, N_STRINGS, 0.5)
+        self._x = np.array([self.gaps[int(s + 0.5)] if s % 1 else self.xs[int(s)] for s in self._sig])
 
     # --- the pick path
     def strokes(self, notes: Notes, earliest=None):
@@ -256,6 +311,8 @@ class ScriptedRight:
 
     def pick_path(self, notes: Notes, earliest=None) -> np.ndarray:
         """(T + 1, 3) pick point at every control step boundary (guitar frame)."""
+        if self.version >= 2:
+            return self._sweep_path(notes, earliest)
         segs, last = self.strokes(notes, earliest)
         T = notes.frames
         zs = self.guitar.string_z
@@ -282,6 +339,133 @@ class ScriptedRight:
                 out[m, 2] = zs + h - (h + self.depth) * min_jerk(bump)
         before = t < first
         out[before, 2] = self.pick0[2] + (zs + self.hover - self.pick0[2]) * min_jerk(t[before] / max(first, 1))
+        return out
+
+    # --- version 2: sweeps
+    def x_of(self, sigma):
+        """Guitar-frame x of string coordinates (linear beyond the outer gaps)."""
+        s = np.asarray(sigma, float)
+        lo = self._x[0] + (s - self._sig[0]) * (self._x[1] - self._x[0]) / 0.5
+        hi = self._x[-1] + (s - self._sig[-1]) * (self._x[-1] - self._x[-2]) / 0.5
+        return np.where(s < self._sig[0], lo, np.where(s > self._sig[-1], hi, np.interp(s, self._sig, self._x)))
+
+    def sigma_of(self, x: float) -> float:
+        """The string coordinate of a guitar-frame x (inverse of `x_of`)."""
+        order = np.argsort(self._x)
+        xp, sp = self._x[order], self._sig[order]
+        slope = (sp[-1] - sp[0]) / (xp[-1] - xp[0])
+        if x < xp[0]:
+            return float(sp[0] + (x - xp[0]) * slope)
+        if x > xp[-1]:
+            return float(sp[-1] + (x - xp[-1]) * slope)
+        return float(np.interp(x, xp, sp))
+
+    @staticmethod
+    def stroke_ends(a: int, b: int, down: bool) -> tuple[float, float]:
+        """(start, end) of a stroke over strings a..b (0-based, a nearer string 1): down goes toward string 1."""
+        return (b + 0.5, a - 0.5) if down else (a - 0.5, b + 0.5)
+
+    def _travel_frames(self, s0: float, s1: float) -> float:
+        dist = abs(s1 - s0)
+        return 0.0 if dist < 1e-6 else max(self.travel_min, self.travel_rate * dist)
+
+    def directions(self, notes_ab, crosses, sigma0: float) -> list[bool]:
+        """Per stroke, down (True) or up: the least total of travel plus `lift_cost` per string passed over, each
+        travel per frame of the time it has (dynamic programming over the two directions of every stroke)."""
+        def cost(s0, s1, dt):
+            passed = sum(1 for k in range(N_STRINGS) if min(s0, s1) < k < max(s0, s1))
+            return (abs(s1 - s0) + self.lift_cost * passed) / max(dt, 1.0)
+        n = len(notes_ab)
+        if n == 0:
+            return []
+        dirs = (True, False)
+        total = np.array([cost(sigma0, self.stroke_ends(*notes_ab[0], d)[0], crosses[0]) for d in dirs])
+        back = np.zeros((n, 2), int)
+        for k in range(1, n):
+            dt = crosses[k] - crosses[k - 1]
+            new = np.empty(2)
+            for j, d in enumerate(dirs):
+                start = self.stroke_ends(*notes_ab[k], d)[0]
+                c = [total[i] + cost(self.stroke_ends(*notes_ab[k - 1], dd)[1], start, dt) for i, dd in enumerate(dirs)]
+                back[k, j] = int(np.argmin(c))
+                new[j] = min(c)
+            total = new
+        j = int(np.argmin(total))
+        out = [True] * n
+        for k in range(n - 1, -1, -1):
+            out[k] = dirs[j]
+            j = back[k, j]
+        return out
+
+    def sweeps(self, notes: Notes, earliest=None) -> tuple[list[Sweep], float]:
+        """The strokes of version 2 and the string coordinate of the home pick."""
+        sigma0 = self.sigma_of(self.pick0[0])
+        rows = []
+        for i in range(notes.n):
+            tg = np.flatnonzero(notes.pick[i])
+            if len(tg) == 0:
+                continue
+            step = notes.onset[i] + self.sweep_cross
+            if earliest is not None:
+                step = max(step, int(earliest[i]) + self.ready_lag)
+            rows.append((i, int(tg.min()), int(tg.max()), step + 0.5))
+        down = self.directions([(a, b) for _, a, b, _ in rows], [c for *_, c in rows], sigma0)
+        out = []
+        for (i, a, b, c), d in zip(rows, down):
+            start, end = self.stroke_ends(a, b, d)
+            n = b - a + 1
+            frames = self.sweep_frames + self.sweep_extra * (n - 1)
+            out.append(Sweep(i, start, end, c, _min_jerk_inverse(0.5 / n), frames, n, int(notes.onset[i + 1])))
+        for a, s in zip(out[:-1], out[1:]):        # a crossing after a travel with too little time comes later
+            travel = self._travel_frames(a.end, s.start)
+            late = travel + 2 * self.half_min * ((1 - a.tau) + s.tau) + self.spare - (s.cross - a.cross)
+            if late > 0 and travel > 0:
+                room = s.note_end - 1.5 - s.cross - (s.strings - 1)
+                s.cross += float(np.clip(late, 0.0, max(0.0, min(room, self.max_delay))))
+        for a, s in zip(out[:-1], out[1:]):        # strokes shortened to share the time between crossings
+            travel = self._travel_frames(a.end, s.start)
+            room = s.cross - a.cross - travel
+            if room < 2 * self.half_min:
+                room = min(s.cross - a.cross, 2 * self.half_min)
+            wa, wb = (1 - a.tau) * a.frames, s.tau * s.frames          # in proportion to what each side would take
+            a.frames = min(a.frames, room * wa / (wa + wb) / (1 - a.tau))
+            s.frames = min(s.frames, room * wb / (wa + wb) / s.tau)
+        return out, sigma0
+
+    def _sweep_path(self, notes: Notes, earliest=None) -> np.ndarray:
+        """Version 2's (T + 1, 3) pick path: minimum-jerk in x from stop to stop (each stroke's start and end), below
+        the strings from the first stroke on, lifted at the step boundaries around each string passed over."""
+        sw, sigma0 = self.sweeps(notes, earliest)
+        T = notes.frames
+        t = np.arange(T + 1, dtype=float)
+        zs = self.guitar.string_z
+        out = np.zeros((T + 1, 3))
+        out[:, 1] = self.y
+        if not sw:
+            out[:, 0], out[:, 2] = self.pick0[0], self.pick0[2]
+            return out
+        first = sw[0].t0
+        approach = (max(0.0, first - 10.0), sigma0)              # from the home pick to the first stroke
+        stops = [approach] + [p for s in sw for p in ((s.t0, s.start), (s.t1, s.end))]
+        sigma = np.full(T + 1, stops[-1][1])
+        sigma[t <= approach[0]] = sigma0
+        for (ta, sa), (tb, sb) in zip(stops[:-1], stops[1:]):
+            m = (t >= ta) & (t <= tb)
+            if tb > ta:
+                sigma[m] = sa + min_jerk((t[m] - ta) / (tb - ta)) * (sb - sa)
+        high = np.zeros(T + 1, bool)
+        legs = [(approach[0], first, sigma0, sw[0].start)] + [(a.t1, s.t0, a.end, s.start) for a, s in zip(sw, sw[1:])]
+        for ta, tb, sa, sb in legs:
+            for k in range(N_STRINGS):
+                if min(sa, sb) < k < max(sa, sb):
+                    tp = ta + _min_jerk_inverse(abs(k - sa) / abs(sb - sa)) * (tb - ta)
+                    high[max(int(np.floor(tp)), 0):min(int(np.ceil(tp)), T) + 1] = True
+        high |= t > sw[-1].t1 + 1
+        z = np.where(high, zs + self.lift, zs - self.depth)
+        before = t < first
+        descent = self.pick0[2] + (zs - self.depth - self.pick0[2]) * min_jerk(t[before] / first)
+        z[before] = np.maximum(z[before], descent)
+        out[:, 0], out[:, 2] = self.x_of(sigma), z
         return out
 
     # --- inverse kinematics
@@ -1088,6 +1272,23 @@ class ScriptedLeft:
             x = np.clip(x + np.linalg.solve(J.T @ J + 1e-6 * np.eye(4), J.T @ e), k.lo[dofs], k.hi[dofs])
         return x
 
+
+    def ready_steps(self, notes: Notes, q: np.ndarray) -> np.ndarray:
+        """(n,) per note, the first control step whose simulated left hand (joint values q (T + 1, 27) of a tracked
+        plan) holds every string as the note asks, by the env's press detection; the note's onset where it never
+        does. The right hand's planner crosses a note's strings after it (`ScriptedRight.sweeps`, `earliest`)."""
+        segs = []
+        for j in range(1, len(q)):                        # state after step j - 1
+            self.kin.set(q[j])
+            segs.append(self.kin.segments())
+        press = np.asarray(jax.vmap(lambda s: detect.pressed_frets(s, self.guitar))(
+            jnp.asarray(np.array(segs), jnp.float32)))
+        out = notes.onset[:-1].copy()
+        for i in range(notes.n):
+            a, b = notes.onset[i], notes.onset[i + 1]
+            ok = np.asarray(scoring.left_ok(jnp.asarray(press[a:b]), jnp.asarray(notes.left[i]))).all(axis=1)
+            out[i] = a + int(np.argmax(ok)) if ok.any() else a
+        return out
 
 @functools.cache
 def _press_fn():

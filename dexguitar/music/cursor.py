@@ -117,7 +117,7 @@ def sample_window(songs: TL.Timeline, key, capacity: int, *, sequential: bool, w
         tempo = jnp.where(jax.random.uniform(k_p) < tempo_prob, jnp.maximum(tempo + bump, TL.MIN_TEMPO), tempo)
     dur = note_frames(ticks, valid, songs.ticks_per_whole[song], tempo, min_frames)
     start = jnp.int32(0)
-    if songs.plan is not None:        # the planned song's own frames: as written, nothing shifted or capped
+    if songs.plan is not None or songs.plan_right is not None:    # a planned song's frames: nothing shifted or capped
         onset = songs.onset[song]
         dur = jnp.where(valid, jnp.diff(onset)[idx], 0)
         start = onset[jnp.minimum(first, onset.shape[0] - 1)]

@@ -59,6 +59,7 @@ class Timeline:
     tempo: jax.Array        # float32 (): effective tempo after rounding
     base_tempo: jax.Array   # float32 (): tempo as written in the song
     plan: Any = None        # `motion.feedforward.Plan` of the left hand, frame-indexed (`EnvConfig.feedforward`)
+    plan_right: Any = None  # ... of the right hand (`EnvConfig.right_feedforward`)
 
     @property
     def note_capacity(self) -> int:

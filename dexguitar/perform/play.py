@@ -57,9 +57,9 @@ def pair(left_dir, right_dir):
     PO.check_pair(lmeta, rmeta, layout, where=(str(left_dir), str(right_dir)))
     sync, norm = PO.init_synchronizer(jax.random.PRNGKey(0), left, right, layout)
     params = {"policy": sync, "obs_norm": norm, "frozen": {"left": left, "right": right}}
-    lspec = PO.PolicySpec.from_meta(lmeta)
+    lspec, rspec = PO.PolicySpec.from_meta(lmeta), PO.PolicySpec.from_meta(rmeta)
     return PO.unsynchronized(params), PO.PolicySpec("synchronizer", "duet", 2 * lmeta["action_size"], layout,
-                                                    lspec.feedforward, lspec.scale)
+                                                    lspec.feedforward, lspec.scale, rspec.right_feedforward)
 
 
 # ---------------------------------------------------------------------------------------------------- recording

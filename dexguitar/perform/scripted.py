@@ -19,7 +19,6 @@ from dexguitar.motion import feedforward as FF
 from dexguitar.motion.planner import LATEST, Notes, ScriptedLeft, ScriptedRight, Tracker
 from dexguitar.music import library
 from dexguitar.music import timeline as TL
-from dexguitar.world import detect
 from dexguitar.world import hands as H
 
 SCORE_FIELDS = ("precision", "recall", "f1", "tp", "predicted", "targets")
@@ -64,28 +63,11 @@ class ScriptedPlayer:
             parts, earliest = {}, None
             if planned is not None:
                 parts["left"] = planned[0]
-                earliest = self.ready_steps(n, planned[1]) if self.tracker is not None else None
+                earliest = self.left.ready_steps(n, planned[1]) if self.tracker is not None else None
             if self.tracker is not None:
                 ctrl, _ = self.tracker.track(self.right.desired(n, earliest))
                 parts["right"] = self.tracker.to_action(ctrl)
             out.append(np.concatenate([parts[r] * self.flip[r] for r in self.roles], axis=1).astype(np.float32))
-        return out
-
-    def ready_steps(self, notes: Notes, q: np.ndarray) -> np.ndarray:
-        """(n,) per note, the first control step whose simulated left hand holds every string as the note asks
-        (the env's press detection on MuJoCo C states); the note's onset when it never does."""
-        kin, guitar = self.left.kin, self.left.guitar
-        segs = []
-        for j in range(1, len(q)):                        # state after step j - 1
-            kin.set(q[j])
-            segs.append(kin.segments())
-        press = np.asarray(jax.vmap(lambda s: detect.pressed_frets(s, guitar))(
-            jnp.asarray(np.array(segs), jnp.float32)))
-        out = notes.onset[:-1].copy()
-        for i in range(notes.n):
-            a, b = notes.onset[i], notes.onset[i + 1]
-            ok = np.asarray(scoring.left_ok(jnp.asarray(press[a:b]), jnp.asarray(notes.left[i]))).all(axis=1)
-            out[i] = a + int(np.argmax(ok)) if ok.any() else a
         return out
 
     def rollout(self, songs, actions: np.ndarray):
