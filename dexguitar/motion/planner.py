@@ -219,9 +219,11 @@ class Sweep:
 
 class ScriptedRight:
     """The picking hand: the pick point follows strokes across the target strings, found by damped least squares
-    on the wrist (slides penalised: they are slow) with the fingers kept in the home grip."""
+    on the wrist (slides penalised: they are slow) with the fingers kept in the home grip. `version` (`RIGHT_LATEST`):
+    1 `strokes`, 2 `sweeps`."""
 
     depth = 0.003          # stroke bottom below string height (training needs >= 1 mm, evaluation > 0)
+    # version 1
     hover = 0.006          # between notes, above string height
     travel = 0.010         # when passing over other strings
     low_apex = 0.0025      # between strokes less than 2 frames apart (no time to rise to `hover`)
