@@ -146,8 +146,8 @@ def _train(args) -> int:
     songs = _material(args, cfg.hand)
     motion = load_motion(args.motion or cfg.hand)
     if args.init_from:
-        check_init(args.init_from, cfg.hand, bool(env_cfg and (env_cfg.feedforward or env_cfg.right_feedforward)),
-                   cfg.action_scale)
+        residual = bool(env_cfg and (env_cfg.feedforward or env_cfg.right_feedforward))
+        check_init(args.init_from, cfg.hand, residual, cfg.action_scale)            # before building anything
     trainer = Trainer(cfg, [TL.from_song(s) for s in songs], reference_frames(motion), env_cfg)
     print(f"training the {cfg.hand} hand on {len(songs)} song(s) with {cfg.num_envs} envs x {cfg.horizon} steps "
           f"({cfg.batch} samples per iteration) on {jax.devices()[0].device_kind}; reference motion "

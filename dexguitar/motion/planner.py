@@ -418,14 +418,13 @@ class ScriptedRight:
             n = b - a + 1
             frames = self.sweep_frames + self.sweep_extra * (n - 1)
             out.append(Sweep(i, start, end, c, _min_jerk_inverse(0.5 / n), frames, n, int(notes.onset[i + 1])))
-        for a, s in zip(out[:-1], out[1:]):        # a crossing after a travel with too little time comes later
-            travel = self._travel_frames(a.end, s.start)
+        travels = [self._travel_frames(a.end, s.start) for a, s in zip(out[:-1], out[1:])]
+        for a, s, travel in zip(out[:-1], out[1:], travels):   # a crossing after a travel short of time comes later
             late = travel + 2 * self.half_min * ((1 - a.tau) + s.tau) + self.spare - (s.cross - a.cross)
             if late > 0 and travel > 0:
                 room = s.note_end - 1.5 - s.cross - (s.strings - 1)
                 s.cross += float(np.clip(late, 0.0, max(0.0, min(room, self.max_delay))))
-        for a, s in zip(out[:-1], out[1:]):        # strokes shortened to share the time between crossings
-            travel = self._travel_frames(a.end, s.start)
+        for a, s, travel in zip(out[:-1], out[1:], travels):   # strokes shortened to share the time between crossings
             room = s.cross - a.cross - travel
             if room < 2 * self.half_min:
                 room = min(s.cross - a.cross, 2 * self.half_min)
@@ -1274,7 +1273,6 @@ class ScriptedLeft:
             x = np.clip(x + np.linalg.solve(J.T @ J + 1e-6 * np.eye(4), J.T @ e), k.lo[dofs], k.hi[dofs])
         return x
 
-
     def ready_steps(self, notes: Notes, q: np.ndarray) -> np.ndarray:
         """(n,) per note, the first control step whose simulated left hand (joint values q (T + 1, 27) of a tracked
         plan) holds every string as the note asks, by the env's press detection; the note's onset where it never
@@ -1291,6 +1289,7 @@ class ScriptedLeft:
             ok = np.asarray(scoring.left_ok(jnp.asarray(press[a:b]), jnp.asarray(notes.left[i]))).all(axis=1)
             out[i] = a + int(np.argmax(ok)) if ok.any() else a
         return out
+
 
 @functools.cache
 def _press_fn():

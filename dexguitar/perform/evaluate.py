@@ -182,12 +182,13 @@ def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str |
     if jax.default_backend() == "cpu":
         size = min(size, CPU_DUET_SONGS if hand == "duet" else CPU_HAND_SONGS)
     timelines = [TL.from_song(s) for s in songs]
-    if size < len(songs):       # plan every song in one pool; the chunks read the plans' disk cache
+    if size < len(songs) and (cfg.feedforward or cfg.right_feedforward):   # plan every song in one pool; the
+        every = TL.batch(timelines)                                           # chunks read the plans' disk cache
         if cfg.feedforward:
-            FF.plan_songs(TL.batch(timelines), cfg.rest_frames, version=int(cfg.feedforward))
+            FF.plan_songs(every, cfg.rest_frames, version=int(cfg.feedforward))
         if cfg.right_feedforward:
-            FF.plan_songs(TL.batch(timelines), cfg.rest_frames, version=int(cfg.right_feedforward), hand="right",
-                          after=FF.left_plans(TL.batch(timelines), cfg))
+            FF.plan_songs(every, cfg.rest_frames, version=int(cfg.right_feedforward), hand="right",
+                          after=FF.left_plans(every, cfg))
     results = {}
     for start in range(0, len(songs), size):
         part = songs[start:start + size]
