@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -27,7 +28,8 @@ from dexguitar.envs.bench import bench_env, check_scenes
 from dexguitar.errors import UserError
 from dexguitar.learn import distill as DI
 from dexguitar.learn import policy as PO
-from dexguitar.learn.run import check_init, check_out, compilation_cache, load_config, recorded_config, train
+from dexguitar.learn.run import (check_init, check_out, compilation_cache, load_config, recorded_config, train,
+                                 xla_flags)
 from dexguitar.learn.sync import SyncTrainer
 from dexguitar.learn.trainer import Trainer
 from dexguitar.motion import load_motion
@@ -525,6 +527,7 @@ def main(argv=None) -> int:
     if getattr(args, "distributed", False):
         jax.distributed.initialize(args.coordinator, args.num_processes, args.process_id)
     if args.command in ("train", "distill", "sync", "songs", "eval", "play"):
+        os.environ["XLA_FLAGS"] = xla_flags(os.environ.get("XLA_FLAGS", ""))    # read when the backend starts
         compilation_cache()
     try:
         return args.func(args)

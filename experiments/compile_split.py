@@ -2,10 +2,12 @@
 first state, then the training chunk's trace, lowering and XLA compile (or load from the persistent cache), each
 timed apart. Run it twice with the same DEXGUITAR_CACHE: the first process compiles, the second loads.
 
-    DEXGUITAR_CACHE=/tmp/xla python experiments/compile_split.py SONG.json [ENVS]     # ENVS >= 512 (minibatch 4096)
+    DEXGUITAR_CACHE=/tmp/xla python experiments/compile_split.py SONG.json [ENVS [RUNS]]
 
-Prints one JSON line (seconds). `device/compile_split.sh` ran it three times on an H100 (`results/general_left/
-session24/compile_split/`).
+ENVS >= 512 (minibatch 4096), 0 for the config's. RUNS > 0 also times that many calls of the compiled chunk after one
+warm-up call (samples/s), to weigh XLA flags that compile faster against the speed of what they compile. Prints one
+JSON line (seconds). `device/compile_split.sh` ran it three times on an H100 (`results/general_left/session24/
+compile_split/`), `device/compile_flags.sh` once per XLA flag set, each with an empty cache.
 """
 import dataclasses
 import json
@@ -23,7 +25,11 @@ from dexguitar.learn.sync import SyncTrainer
 from dexguitar.music import timeline as TL
 
 
-def main(song_file: str, envs: int = 0) -> dict:
+def log(out: dict) -> None:
+    print(json.dumps({k: round(v, 1) for k, v in out.items()}), file=sys.stderr, flush=True)
+
+
+def main(song_file: str, envs: int = 0, runs: int = 0) -> dict:
     compilation_cache(os.environ.get("DEXGUITAR_CACHE"))
     cfg, env_cfg = load_config("experiments/sync_hold.py", hand="duet", num_envs=envs or None)
     if envs:
@@ -34,22 +40,39 @@ def main(song_file: str, envs: int = 0) -> dict:
     trainer = SyncTrainer(cfg, [TL.from_song(load_song(song_file))], reference_frames(load_motion("left")), *pair,
                           env_cfg)
     out["build_s"] = time.perf_counter() - t
+    log(out)
     t = time.perf_counter()
     state = jax.block_until_ready(trainer.init())
     out["init_s"] = time.perf_counter() - t
+    log(out)
     chunk = trainer.make_train_chunk(cfg.iterations_per_call, Placement())
     t = time.perf_counter()
     traced = chunk.trace(state, trainer.data)
     out["trace_s"] = time.perf_counter() - t
+    log(out)
     t = time.perf_counter()
     lowered = traced.lower()
     out["lower_s"] = time.perf_counter() - t
+    log(out)
     t = time.perf_counter()
-    lowered.compile()
+    compiled = lowered.compile()
     out["compile_or_load_s"] = time.perf_counter() - t
+    log(out)
+    speed = {}
+    if runs:                       # the compiled chunk's speed: one warm-up call, then `runs` timed calls
+        data = trainer.data
+        state, _ = compiled(state, data)
+        jax.block_until_ready(state)
+        t = time.perf_counter()
+        for _ in range(runs):
+            state, _ = compiled(state, data)
+        jax.block_until_ready(state)
+        dt = (time.perf_counter() - t) / runs
+        speed = {"chunk_s": round(dt, 3),
+                 "samples_per_s": round(cfg.num_envs * cfg.horizon * cfg.iterations_per_call / dt)}
     return {"device": jax.devices()[0].device_kind, "envs": cfg.num_envs,
-            **{k: round(v, 1) for k, v in out.items()}}
+            "xla_flags": os.environ.get("XLA_FLAGS", ""), **{k: round(v, 1) for k, v in out.items()}, **speed}
 
 
 if __name__ == "__main__":          # planning spawns worker processes: they import this module
-    print(json.dumps(main(sys.argv[1], *(int(v) for v in sys.argv[2:3]))))
+    print(json.dumps(main(sys.argv[1], *(int(v) for v in sys.argv[2:4]))))

@@ -11,12 +11,17 @@ from pathlib import Path
 import jax
 import pytest
 
+from dexguitar.learn.run import FAST_COMPILE
+
 # LLVM at -O0 for the tests' programs (and for the processes they start, which inherit the environment): XLA's own
 # graph optimizations all still run, only the machine code is less tuned; it compiles the training programs ~40%
 # faster on a CPU, and the tiny test workloads barely notice the slower code. XLA's older loop emitters instead of its
 # fusion emitters take about as much again (tests/test_envs.py, two at once on 2 cores: 138 -> 73 s). Set before
 # JAX starts its backend.
-for flag in ("--xla_backend_optimization_level=0", "--xla_cpu_use_fusion_emitters=false"):
+# And the flag the commands themselves add (`learn/run.py`, `FAST_COMPILE`): JAX's persistent-cache keys hash XLA_FLAGS
+# as it is at each compile, so a test calling `cli.main` would otherwise change the keys of every later compile in its
+# process, and miss the programs that earlier tests cached (on a 2-core machine: 19.5 min, 17.6 min with the flag here).
+for flag in ("--xla_backend_optimization_level=0", "--xla_cpu_use_fusion_emitters=false", FAST_COMPILE):
     if flag.split("=")[0] not in os.environ.get("XLA_FLAGS", ""):
         os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " " + flag).strip()
 

@@ -3,6 +3,7 @@ evaluation of the same song set, with other weights, compiles nothing either; tw
 capacity lower to one program, whatever the process traced in between. Counted with JAX's own compile events
 (`/jax/core/compile/backend_compile_duration`, one per XLA compilation or persistent-cache load: tests/conftest.py)."""
 import hashlib
+import os
 
 import jax
 import jax.numpy as jnp
@@ -74,3 +75,18 @@ def test_two_songs_of_a_capacity_share_one_program_whatever_was_traced_between(t
     key = jax.random.PRNGKey(0)
     assert (trainer._init_program.lower(key, trainer.init_inputs()).as_text()
             == other._init_program.lower(key, other.init_inputs()).as_text())
+
+
+@pytest.mark.parametrize("user, expected", [
+    ("", "--xla_gpu_enable_triton_gemm=false"),
+    ("--xla_force_host_platform_device_count=2", "--xla_force_host_platform_device_count=2 "
+                                                 "--xla_gpu_enable_triton_gemm=false"),
+    ("--xla_gpu_enable_triton_gemm=true", "--xla_gpu_enable_triton_gemm=true"),       # the user's choice stands
+])
+def test_commands_that_compile_turn_triton_gemms_off(monkeypatch, user, expected):
+    """XLA reads XLA_FLAGS when its backend starts, so `main` sets the flag before the command runs (here a command
+    that fails at once on a missing policy, after the flag is set)."""
+    from dexguitar.cli import main
+    monkeypatch.setenv("XLA_FLAGS", user)
+    assert main(["eval", "--ckpt", "/nonexistent/policy", "--song", "ode_to_joy"]) == 2
+    assert os.environ["XLA_FLAGS"] == expected

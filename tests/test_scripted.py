@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from dexguitar import envs
-from dexguitar.motion.planner import BARRE, FINGER_DOFS, PAIR, Notes, ScriptedLeft, ScriptedRight
+from dexguitar.motion import feedforward as FF
+from dexguitar.motion.planner import BARRE, FINGER_DOFS, LATEST, PAIR, Notes, ScriptedLeft, ScriptedRight
 from dexguitar.perform.scripted import ScriptedPlayer
 from dexguitar.music import timeline as TL
 from dexguitar.music.song import Song, make_note
@@ -104,10 +105,45 @@ def test_version_2_picks_fast_lines_note_by_note():
     assert (old != notes.pick).any(axis=1).sum() >= 20
     env = envs.make("right", [tl], envs.EnvConfig().evaluation())
     player = ScriptedPlayer(env)
-    assert player.right.version == 2
+    player.right = ScriptedRight(2)
     assert player.play(0)["right"]["f1"] >= 0.95                # and the simulated hand follows it
     player.right = ScriptedRight(1)
     assert player.play(0)["right"]["f1"] < 0.5                  # 0.22 measured
+
+
+def quick_strums() -> Song:
+    """Strums over strings 1-3 in 12- and 6-frame notes (150 BPM) whose fret on string 1 changes at every note, the
+    other two open, as in `spring_overture`: string 1 must be picked early in its note for its press to last 2/3 of
+    the note from the pick (the duet's rule (3)), before the left hand moves on to the next fret."""
+    def chord(fret, d):
+        return make_note(d, [fret, 0, 0, -1, -1, -1])
+    bar = [chord(3, "1/8"), chord(5, "1/16"), chord(3, "1/16"), chord(0, "1/16"), chord(5, "1/16"), chord(3, "1/16")]
+    return Song(tempo=150, notes=(chord(0, "1/2"), *bar * 3, chord(3, "1/2")), title="quick strums")
+
+
+def test_version_3_strums_so_that_the_left_hand_holds_each_string_long_enough():
+    tl = TL.from_song(quick_strums())
+    env = envs.make("duet", [tl], envs.EnvConfig().evaluation())
+    player = ScriptedPlayer(env)
+    notes = Notes.from_window(env.sample_window(jax.random.PRNGKey(0), 0))
+    (_, q), = FF.plan_all([(notes.left, notes.pick, notes.onset, LATEST)], log=lambda m: None)
+    timing = player.left.timing(notes, q)
+
+    def short(version):
+        """Per stroke of the plan, its strings that would be picked too late for the planned left hand's press."""
+        right = ScriptedRight(version)
+        return np.array([right.short_holds(notes, timing, s.note, *np.flatnonzero(notes.pick[s.note])[[0, -1]],
+                                           s.cross, s.start > s.end, s.frames) for s in right.sweeps(notes, timing)[0]])
+    # version 2 alternates its strokes: every down-stroke picks string 1 last, in a 6-frame note too late
+    v2, v3 = short(2), short(3)
+    assert v2.sum() >= 6 and v3.sum() <= 1
+    scores = {}
+    for version in (2, 3):
+        player.right = ScriptedRight(version)
+        result = player.play(0)
+        assert result["left"]["f1"] == result["right"]["f1"] == 1.0          # each hand plays every note ...
+        scores[version] = result["both"]["f1"]
+    assert scores[3] >= 0.95 and scores[2] <= 0.9                            # ... but in time only so (0.983, 0.883)
 
 
 def tracked_presses(hand, notes) -> np.ndarray:

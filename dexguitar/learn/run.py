@@ -63,6 +63,17 @@ def compilation_cache(directory=None) -> Path:
     return directory
 
 
+# On an H100 the GSync training chunk compiled in 113 s with XLA's Triton GEMMs and in 63-73 s without them (their
+# autotuning), running 3.5 % slower (experiments/benchmarks.md, "XLA flags").
+FAST_COMPILE = "--xla_gpu_enable_triton_gemm=false"
+
+
+def xla_flags(current: str) -> str:
+    """`XLA_FLAGS` for the commands that compile: the user's own, plus `FAST_COMPILE` unless they set that flag."""
+    name = FAST_COMPILE.split("=")[0]
+    return current if name in current else f"{current} {FAST_COMPILE}".strip()
+
+
 def chunk_summary(metrics: dict, n_iter: int) -> dict:
     m = {k: float(v) for k, v in metrics.items()}
     out = {k: m[k] for k in m if k in SUMMED or k.startswith(("notes/", "nonfinite/"))}

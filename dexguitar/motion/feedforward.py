@@ -82,7 +82,7 @@ def plan_notes(job) -> tuple[np.ndarray, np.ndarray]:
         if role == "left":
             desired = hand.desired(notes)
         else:
-            earliest = None if after is None else _planner("left", LATEST)[0].ready_steps(notes, after)
+            earliest = None if after is None else _planner("left", LATEST)[0].timing(notes, after)
             desired = hand.desired(notes, earliest)
         ctrl, q = tracker.track(desired)
     return np.clip(tracker.to_action(ctrl), -1.0, 1.0).astype(np.float32), q.astype(np.float32)

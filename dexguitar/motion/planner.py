@@ -189,8 +189,28 @@ def _clearance(a0, a1, b0, b1, n=9):
 # song (`ScriptedRight.directions`: alternate on one string, sweep on to the next one, few strings passed over), the
 # stroke shortened to the time between its neighbours, lifted only over a string it passes, and a crossing after a long
 # travel later in its note (`ScriptedRight.sweeps`); a strum over more strings is quicker, and in the duet each note's
-# first string is crossed as soon as the simulated left hand holds the note (`ready_lag`).
-RIGHT_LATEST = 2
+# first string is crossed as soon as the simulated left hand holds the note (`ready_lag`); 3 and in the duet a stroke
+# whose later strings would be picked too late for the planned left hand's press to last 2/3 of the note from the pick
+# (`LeftTiming.lasts`) is quicker, and crosses its first string in the note's first step where the left hand is ready
+# a step before (`ScriptedRight.fit`).
+RIGHT_LATEST = 3
+
+
+@dataclasses.dataclass
+class LeftTiming:
+    """What the right hand's planner knows of the tracked left plan in the duet: per note the first control step that
+    ends with the note held (`ready`), and the frets the env detects after every step (`press`, (T, 6))."""
+
+    ready: np.ndarray
+    press: np.ndarray
+
+    def lasts(self, goal, s: int, step: int, frames: int) -> bool:
+        """Does string s stay as `goal` asks (the note's left goal) for `frames` steps from `step` on? A pick's hold
+        (the duet's rule (3), `scoring`) may run on into the next notes while the string stays so."""
+        run = self.press[step:step + frames, s]
+        g = int(goal[s])
+        ok = run == g if g > 0 else (run == 0 if g < 0 else np.ones(len(run), bool))
+        return len(run) == frames and bool(ok.all())
 
 
 @dataclasses.dataclass
@@ -241,6 +261,10 @@ class ScriptedRight:
     spare = 1.0            # what a travel leaves free around it before its crossing is moved later
     max_delay = 2.0        # the most a crossing moves later in its note
     lift_cost = 1.0        # `directions`: a string passed over costs as much as moving one spacing more
+    # version 3 (the duet: `fit`)
+    strum_rate = 0.9       # a stroke quickened for the holds takes at least this many steps per string
+    pick_lag = 0.4         # the simulated pick crosses a string up to this many steps after the plan does
+    early_cross = 0.5      # where that holds more strings, a note's first string is crossed this late in its step 0
 
     def __init__(self, version: int = RIGHT_LATEST):
         if not 1 <= version <= RIGHT_LATEST:
@@ -315,7 +339,7 @@ class ScriptedRight:
         """(T + 1, 3) pick point at every control step boundary (guitar frame)."""
         if self.version >= 2:
             return self._sweep_path(notes, earliest)
-        segs, last = self.strokes(notes, earliest)
+        segs, last = self.strokes(notes, earliest.ready if isinstance(earliest, LeftTiming) else earliest)
         T = notes.frames
         zs = self.guitar.string_z
         out = np.zeros((T + 1, 3))
@@ -400,7 +424,10 @@ class ScriptedRight:
         return out
 
     def sweeps(self, notes: Notes, earliest=None) -> tuple[list[Sweep], float]:
-        """The strokes of version 2 and the string coordinate of the home pick."""
+        """The strokes of versions 2 and 3 and the string coordinate of the home pick. earliest: None (alone), each note's
+        first step at which its strings may be crossed, or a `LeftTiming` (the duet)."""
+        timing = earliest if isinstance(earliest, LeftTiming) else None
+        earliest = timing.ready if timing is not None else earliest
         sigma0 = self.sigma_of(self.pick0[0])
         rows = []
         for i in range(notes.n):
@@ -424,6 +451,9 @@ class ScriptedRight:
             if late > 0 and travel > 0:
                 room = s.note_end - 1.5 - s.cross - (s.strings - 1)
                 s.cross += float(np.clip(late, 0.0, max(0.0, min(room, self.max_delay))))
+        if timing is not None and self.version >= 3:
+            for s in out:
+                self.fit(notes, timing, s)
         for a, s, travel in zip(out[:-1], out[1:], travels):   # strokes shortened to share the time between crossings
             room = s.cross - a.cross - travel
             if room < 2 * self.half_min:
@@ -432,6 +462,51 @@ class ScriptedRight:
             a.frames = min(a.frames, room * wa / (wa + wb) / (1 - a.tau))
             s.frames = min(s.frames, room * wb / (wa + wb) / s.tau)
         return out, sigma0
+
+    def crossings(self, notes: Notes, i: int, a: int, b: int, cross: float, down: bool,
+                  frames: float | None = None) -> dict:
+        """{string: planned time} at which a stroke over strings a..b of `frames` (default: its full length),
+        crossing its first string at `cross`, crosses each of note i's picked strings."""
+        n = b - a + 1
+        frames = self.sweep_frames + self.sweep_extra * (n - 1) if frames is None else frames
+        t0 = cross - _min_jerk_inverse(0.5 / n) * frames
+        return {int(s): t0 + _min_jerk_inverse(((b - s if down else s - a) + 0.5) / n) * frames
+                for s in np.flatnonzero(notes.pick[i])}
+
+    def short_holds(self, notes: Notes, timing: LeftTiming, i: int, a: int, b: int, cross: float, down: bool,
+                    frames: float | None = None) -> int:
+        """How many of note i's picked strings (a..b) a stroke (`crossings`) would pick too late for the left hand's
+        press to last 2/3 of the note from the pick (the simulated pick `pick_lag` behind the plan)."""
+        need = (2 * int(notes.onset[i + 1] - notes.onset[i]) + 2) // 3
+        return sum(not timing.lasts(notes.left[i], s, int(np.floor(t + self.pick_lag)), need)
+                   for s, t in self.crossings(notes, i, a, b, cross, down, frames).items())
+
+    def fit(self, notes: Notes, timing: LeftTiming, sw: Sweep) -> None:
+        """A stroke whose later strings would be picked too late for the left hand's press (`short_holds`): quicker,
+        down to `strum_rate` steps per string, and its first crossing in the note's step 0 (at `early_cross` of the
+        step, so that a tracking lag keeps it in the note) where each string crossed in that step is held as the note
+        asks a step before already (the simulated left hand may lag its plan); the least change that holds the most
+        strings."""
+        i = sw.note
+        tg = np.flatnonzero(notes.pick[i])
+        a, b, down = int(tg.min()), int(tg.max()), sw.start > sw.end
+        best = (self.short_holds(notes, timing, i, a, b, sw.cross, down, sw.frames), sw.cross, sw.frames)
+        if best[0] == 0:
+            return
+        onset = int(notes.onset[i])
+        floor = max(2 * self.half_min, self.strum_rate * sw.strings)
+        for cross in (sw.cross, onset + self.early_cross):
+            if cross < sw.cross and (onset + 0.5 >= sw.cross or onset < 1):
+                continue
+            f = sw.frames
+            while f >= floor - 1e-9 and best[0] > 0:
+                times = self.crossings(notes, i, a, b, cross, down, f)
+                safe = all(timing.lasts(notes.left[i], s, onset - 1, 2) for s, t in times.items() if t < onset + 1)
+                k = self.short_holds(notes, timing, i, a, b, cross, down, f)
+                if k < best[0] and (cross == sw.cross or safe):
+                    best = (k, cross, f)
+                f -= 0.5
+        sw.cross, sw.frames = best[1], best[2]
 
     def _sweep_path(self, notes: Notes, earliest=None) -> np.ndarray:
         """Version 2's (T + 1, 3) pick path: minimum-jerk in x from stop to stop (each stroke's start and end), below
@@ -1277,6 +1352,10 @@ class ScriptedLeft:
         """(n,) per note, the first control step whose simulated left hand (joint values q (T + 1, 27) of a tracked
         plan) holds every string as the note asks, by the env's press detection; the note's onset where it never
         does. The right hand's planner crosses a note's strings after it (`ScriptedRight.sweeps`, `earliest`)."""
+        return self.timing(notes, q).ready
+
+    def timing(self, notes: Notes, q: np.ndarray) -> LeftTiming:
+        """`ready_steps` and the frets pressed after every step, for the right hand's planner in the duet."""
         segs = []
         for j in range(1, len(q)):                        # state after step j - 1
             self.kin.set(q[j])
@@ -1288,7 +1367,7 @@ class ScriptedLeft:
             a, b = notes.onset[i], notes.onset[i + 1]
             ok = np.asarray(scoring.left_ok(jnp.asarray(press[a:b]), jnp.asarray(notes.left[i]))).all(axis=1)
             out[i] = a + int(np.argmax(ok)) if ok.any() else a
-        return out
+        return LeftTiming(out, press)
 
 
 @functools.cache

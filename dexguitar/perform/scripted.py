@@ -63,7 +63,7 @@ class ScriptedPlayer:
             parts, earliest = {}, None
             if planned is not None:
                 parts["left"] = planned[0]
-                earliest = self.left.ready_steps(n, planned[1]) if self.tracker is not None else None
+                earliest = self.left.timing(n, planned[1]) if self.tracker is not None else None
             if self.tracker is not None:
                 ctrl, _ = self.tracker.track(self.right.desired(n, earliest))
                 parts["right"] = self.tracker.to_action(ctrl)
