@@ -9,6 +9,7 @@ warm-up call (samples/s), to weigh XLA flags that compile faster against the spe
 JSON line (seconds). `device/compile_split.sh` ran it three times on an H100 (`results/general_left/session24/
 compile_split/`), `device/compile_flags.sh` once per XLA flag set, each with an empty cache.
 """
+import contextlib
 import dataclasses
 import json
 import os
@@ -25,7 +26,12 @@ from dexguitar.learn.sync import SyncTrainer
 from dexguitar.music import timeline as TL
 
 
-def log(out: dict) -> None:
+@contextlib.contextmanager
+def timed(out: dict, stage: str):
+    """Time the block as `out[stage]` (seconds) and print the stages so far to stderr."""
+    t = time.perf_counter()
+    yield
+    out[stage] = time.perf_counter() - t
     print(json.dumps({k: round(v, 1) for k, v in out.items()}), file=sys.stderr, flush=True)
 
 
@@ -36,28 +42,18 @@ def main(song_file: str, envs: int = 0, runs: int = 0) -> dict:
         cfg = dataclasses.replace(cfg, minibatch=min(cfg.minibatch, envs * cfg.horizon))
     pair = PO.load_pair("models/policies/left_general", "models/policies/right_mixed")
     out = {}
-    t = time.perf_counter()
-    trainer = SyncTrainer(cfg, [TL.from_song(load_song(song_file))], reference_frames(load_motion("left")), *pair,
-                          env_cfg)
-    out["build_s"] = time.perf_counter() - t
-    log(out)
-    t = time.perf_counter()
-    state = jax.block_until_ready(trainer.init())
-    out["init_s"] = time.perf_counter() - t
-    log(out)
+    with timed(out, "build_s"):
+        trainer = SyncTrainer(cfg, [TL.from_song(load_song(song_file))], reference_frames(load_motion("left")),
+                              *pair, env_cfg)
+    with timed(out, "init_s"):
+        state = jax.block_until_ready(trainer.init())
     chunk = trainer.make_train_chunk(cfg.iterations_per_call, Placement())
-    t = time.perf_counter()
-    traced = chunk.trace(state, trainer.data)
-    out["trace_s"] = time.perf_counter() - t
-    log(out)
-    t = time.perf_counter()
-    lowered = traced.lower()
-    out["lower_s"] = time.perf_counter() - t
-    log(out)
-    t = time.perf_counter()
-    compiled = lowered.compile()
-    out["compile_or_load_s"] = time.perf_counter() - t
-    log(out)
+    with timed(out, "trace_s"):
+        traced = chunk.trace(state, trainer.data)
+    with timed(out, "lower_s"):
+        lowered = traced.lower()
+    with timed(out, "compile_or_load_s"):
+        compiled = lowered.compile()
     speed = {}
     if runs:                       # the compiled chunk's speed: one warm-up call, then `runs` timed calls
         data = trainer.data

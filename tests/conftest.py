@@ -11,7 +11,7 @@ from pathlib import Path
 import jax
 import pytest
 
-from dexguitar.learn.run import FAST_COMPILE
+from dexguitar.learn.run import FAST_COMPILE, xla_flags
 
 # LLVM at -O0 for the tests' programs (and for the processes they start, which inherit the environment): XLA's own
 # graph optimizations all still run, only the machine code is less tuned; it compiles the training programs ~40%
@@ -21,9 +21,8 @@ from dexguitar.learn.run import FAST_COMPILE
 # And the flag the commands themselves add (`learn/run.py`, `FAST_COMPILE`): JAX's persistent-cache keys hash XLA_FLAGS
 # as it is at each compile, so a test calling `cli.main` would otherwise change the keys of every later compile in its
 # process, and miss the programs that earlier tests cached (on a 2-core machine: 19.5 min, 17.6 min with the flag here).
-for flag in ("--xla_backend_optimization_level=0", "--xla_cpu_use_fusion_emitters=false", FAST_COMPILE):
-    if flag.split("=")[0] not in os.environ.get("XLA_FLAGS", ""):
-        os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " " + flag).strip()
+os.environ["XLA_FLAGS"] = xla_flags(os.environ.get("XLA_FLAGS", ""), ("--xla_backend_optimization_level=0",
+                                                                      "--xla_cpu_use_fusion_emitters=false", FAST_COMPILE))
 
 # an empty DEXGUITAR_TEST_CACHE is unset (not the working directory, which would fill with cache files)
 CACHE = Path(os.environ.get("DEXGUITAR_TEST_CACHE") or Path(__file__).resolve().parent.parent / ".cache" / "xla")

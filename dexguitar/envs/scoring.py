@@ -82,7 +82,7 @@ def update(tally: NoteTally, press, goal, picked=None, errors=None) -> NoteTally
                          press_at_pick=tally.press_at_pick | (first & state_ok))
 
 
-def _hold_frames(frames):
+def hold_frames(frames):
     """Frames a hold must last in a note of `frames` frames: 2/3 of it, rounded up (3 * run >= 2 * frames)."""
     return (2 * frames + 2) // 3
 
@@ -96,7 +96,7 @@ def holds_completed(before: NoteTally, after: NoteTally, frames, targets):
     """bool (6,): strings whose both-hands verdict became right in this step (`update` took `before` to `after`):
     a target picked once, cleanly, while pressed right, held so for 2/3 of its note's `frames` from the pick,
     within the note or, for the previous note's open holds, into this one (as `close` judges them)."""
-    need = _hold_frames(frames)
+    need = hold_frames(frames)
     within = _picked_right(after, targets) & after.press_at_pick & (after.held >= need) & (before.held < need)
     across = (before.prev_need > 0) & (after.prev_need == 0) & after.prev_tp
     return within | across
@@ -128,7 +128,7 @@ def close(tally: NoteTally, frames, goal, targets=None):
         open_ = good & ~done & (tally.held > 0)    # held since the pick up to the note's end, not yet long enough
         out["both"] = _prf(tally.prev_tp, tally.prev_picked, tally.prev_targets)
         out["both_now"] = _prf(done, picked, targets)
-        fresh = fresh.replace(prev_need=jnp.where(open_, _hold_frames(frames) - tally.held, 0), prev_goal=goal,
+        fresh = fresh.replace(prev_need=jnp.where(open_, hold_frames(frames) - tally.held, 0), prev_goal=goal,
                               prev_tp=done, prev_picked=picked, prev_targets=targets)
     return out, fresh
 

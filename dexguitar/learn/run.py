@@ -68,10 +68,12 @@ def compilation_cache(directory=None) -> Path:
 FAST_COMPILE = "--xla_gpu_enable_triton_gemm=false"
 
 
-def xla_flags(current: str) -> str:
-    """`XLA_FLAGS` for the commands that compile: the user's own, plus `FAST_COMPILE` unless they set that flag."""
-    name = FAST_COMPILE.split("=")[0]
-    return current if name in current else f"{current} {FAST_COMPILE}".strip()
+def xla_flags(current: str, flags=(FAST_COMPILE,)) -> str:
+    """`XLA_FLAGS` for the commands that compile: the user's own, plus each of `flags` whose name they did not set."""
+    for flag in flags:
+        if flag.split("=")[0] not in current:
+            current = f"{current} {flag}".strip()
+    return current
 
 
 def chunk_summary(metrics: dict, n_iter: int) -> dict:

@@ -207,10 +207,8 @@ class LeftTiming:
     def lasts(self, goal, s: int, step: int, frames: int) -> bool:
         """Does string s stay as `goal` asks (the note's left goal) for `frames` steps from `step` on? A pick's hold
         (the duet's rule (3), `scoring`) may run on into the next notes while the string stays so."""
-        run = self.press[step:step + frames, s]
-        g = int(goal[s])
-        ok = run == g if g > 0 else (run == 0 if g < 0 else np.ones(len(run), bool))
-        return len(run) == frames and bool(ok.all())
+        run = self.press[step:step + frames]
+        return len(run) == frames and bool(np.all(np.asarray(scoring.left_ok(run, np.asarray(goal)))[:, s]))
 
 
 @dataclasses.dataclass
@@ -477,7 +475,7 @@ class ScriptedRight:
                     frames: float | None = None) -> int:
         """How many of note i's picked strings (a..b) a stroke (`crossings`) would pick too late for the left hand's
         press to last 2/3 of the note from the pick (the simulated pick `pick_lag` behind the plan)."""
-        need = (2 * int(notes.onset[i + 1] - notes.onset[i]) + 2) // 3
+        need = scoring.hold_frames(int(notes.onset[i + 1] - notes.onset[i]))
         return sum(not timing.lasts(notes.left[i], s, int(np.floor(t + self.pick_lag)), need)
                    for s, t in self.crossings(notes, i, a, b, cross, down, frames).items())
 
@@ -1382,7 +1380,7 @@ def _pressed(segments) -> np.ndarray:
 
 def _spare(n: int) -> int:
     """Frames of an n-frame note beyond the 2/3 of it that must be held (`scoring.close`)."""
-    return n - (2 * n + 2) // 3
+    return n - scoring.hold_frames(n)
 
 
 def _by_fret(press: list, p: int, first: int = 0) -> dict:
