@@ -34,14 +34,17 @@ os.environ["DEXGUITAR_CACHE"] = str(CACHE)
 os.environ.setdefault("DEXGUITAR_PLANS", str(CACHE.parent / "plans"))
 
 
-COMPILES = []          # one entry per XLA compilation (JAX's own event), for the compile-once tests
+# one entry per XLA compilation (JAX's own event) or training chunk loaded from its file (`learn.executable`), for
+# the compile-once tests
+COMPILES = []
 jax.monitoring.register_event_duration_secs_listener(
-    lambda name, secs, **kw: COMPILES.append(name) if name == "/jax/core/compile/backend_compile_duration" else None)
+    lambda name, secs, **kw: COMPILES.append(name) if name in ("/jax/core/compile/backend_compile_duration",
+                                                                "/dexguitar/chunk/load_duration") else None)
 
 
 @pytest.fixture
 def compiles():
-    """The number of XLA compilations so far in this process."""
+    """The number of XLA compilations (and training chunks loaded from their files) so far in this process."""
     return lambda: len(COMPILES)
 
 
@@ -50,7 +53,9 @@ def compiles_per_call(compiles, monkeypatch):
     """run(trainer, out, calls=2) -> the number of compilations of each host call of `train`, counted from the end
     of one call (its export) to the end of the next (the first count includes building the run)."""
     from dexguitar.learn import checkpoint as C
+    from dexguitar.learn import executable as X
     from dexguitar.learn import run as RUN
+    monkeypatch.setattr(X, "_LIVE", {})        # not a chunk that an earlier test of this process compiled
 
     def run(trainer, out, calls: int = 2) -> list[int]:
         counts, save = [], C.save

@@ -2,7 +2,9 @@
 evaluation of the same song set, with other weights, compiles nothing either; two trainers for two songs of one
 capacity lower to one program, whatever the process traced in between. Counted with JAX's own compile events
 (`/jax/core/compile/backend_compile_duration`, one per XLA compilation or persistent-cache load: tests/conftest.py)."""
+import dataclasses
 import hashlib
+import json
 import os
 
 import jax
@@ -19,6 +21,140 @@ def test_a_second_train_call_compiles_nothing(trainer, tmp_path, compiles_per_ca
     first, second = compiles_per_call(trainer, tmp_path / "run")
     assert first >= 1            # the run did compile (the count would see it) ...
     assert second == 0           # ... once
+
+
+def test_a_later_run_in_the_process_reuses_its_chunk(trainer, tmp_path, monkeypatch, compiles):
+    """A second run of the same code, config and shapes in one process (`dexguitar songs`: the next song of a
+    capacity) takes the chunk the first one compiled (`learn.executable`): nothing traced, lowered, compiled or
+    loaded, and the same numbers."""
+    from dexguitar.learn import executable as X
+    from dexguitar.learn import run as RUN
+    from dexguitar.learn.trainer import Trainer
+    monkeypatch.setattr(X, "directory", lambda: tmp_path / "chunks")
+    monkeypatch.setattr(X, "_LIVE", {})
+
+    def train(out):
+        logs = []
+        RUN.train(trainer, tmp_path / out, iterations=1, progress=False, log=logs.append)
+        rows = [json.loads(line) for line in (tmp_path / out / "metrics.jsonl").read_text().splitlines()]
+        return logs, json.dumps([{k: v for k, v in r.items() if k not in ("seconds", "samples_per_s", "wall",
+                                                                           "compile_s")}
+                                 for r in rows])        # as text: F1 is NaN before a note is judged
+
+    logs, first = train("a")
+    assert any(m.startswith("compiled the training chunk") for m in logs)
+
+    def no_trace(*args, **kwargs):
+        raise AssertionError("the chunk was traced")
+    monkeypatch.setattr(Trainer, "make_train_chunk", no_trace)
+    before = compiles()
+    logs, second = train("b")
+    assert any(m.startswith("reused the training chunk") for m in logs) and compiles() == before
+    assert second == first
+
+
+@dataclasses.dataclass(frozen=True)
+class StubConfig:
+    scale: float = 2.0
+
+
+class StubTrainer:
+    """What `learn.executable` reads of a trainer, around a chunk that compiles in milliseconds."""
+
+    def __init__(self, scale: float = 2.0):
+        self.config, self.env, self.spec, self.traced = StubConfig(scale), StubEnv(), "stub", 0
+
+    def make_train_chunk(self, n, where):
+        self.traced += 1
+        scale = self.config.scale
+
+        def chunk(state, data):
+            for _ in range(n):
+                state = jnp.tanh(state * scale + data)
+            return state, {"sum": jnp.sum(state)}
+        return jax.jit(chunk)
+
+
+class StubEnv:
+    config = StubConfig(0.0)
+
+
+STUB_RUN = """
+import json, sys
+from pathlib import Path
+sys.path.insert(0, sys.argv[2])
+import jax, jax.numpy as jnp
+from dexguitar.learn import executable as X
+from dexguitar.learn.devices import Placement
+from test_compile_once import StubTrainer
+X.directory = lambda: Path(sys.argv[1])
+trainer = StubTrainer()
+state = jax.ShapeDtypeStruct((8,), jnp.float32)
+build = X.ChunkBuild(trainer, Placement(), 3, state, jnp.linspace(-1, 1, 8), print)
+compiled, seconds, how = build.result()
+print(json.dumps({"how": how, "traced": trainer.traced,
+                  "out": compiled(jnp.arange(8, dtype=jnp.float32) / 8, jnp.linspace(-1, 1, 8))[0].tolist()}))
+"""
+
+
+def test_a_chunk_file_loads_in_a_new_process_without_tracing(tmp_path, monkeypatch):
+    """The first build of a chunk keeps it in a file; a new process loads it without tracing it and computes the
+    same; a file that does not load is compiled again; another config, other XLA flags or another number of
+    iterations per call is another file; on XLA:CPU a chunk that came from JAX's persistent cache is not kept."""
+    import subprocess
+    import sys
+    from dexguitar.learn import executable as X
+    from dexguitar.learn.devices import Placement
+    monkeypatch.setattr(X, "directory", lambda: tmp_path)
+    monkeypatch.setattr(X, "_LIVE", {})
+    state, data = jax.ShapeDtypeStruct((8,), jnp.float32), jnp.linspace(-1, 1, 8)
+    x = jnp.arange(8, dtype=jnp.float32) / 8
+    expected = x
+    for _ in range(3):
+        expected = jnp.tanh(expected * 2.0 + data)
+
+    def build(trainer, n=3):
+        return X.ChunkBuild(trainer, Placement(), n, state, data, logs.append).result()
+
+    logs, trainer = [], StubTrainer()
+    compiled, _, how = build(trainer)
+    files = list(tmp_path.glob("chunk-*.exe"))
+    assert how == "compiled" and trainer.traced == 1 and len(files) == 1
+    assert jnp.allclose(compiled(x, data)[0], expected)
+
+    def run():
+        done = subprocess.run([sys.executable, "-c", STUB_RUN, str(tmp_path), os.path.dirname(__file__)],
+                              capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0, done.stderr[-3000:]
+        return json.loads(done.stdout.splitlines()[-1])
+    out = run()
+    assert out["how"] == "loaded" and out["traced"] == 0
+    assert jnp.allclose(jnp.asarray(out["out"]), expected)
+
+    files[0].write_bytes(b"not an executable")
+    out = run()
+    assert out["how"] == "compiled" and out["traced"] == 1 and jnp.allclose(jnp.asarray(out["out"]), expected)
+
+    where = Placement()
+    base = X.key(trainer, where, 3, (state, data))
+    assert X.key(StubTrainer(3.0), where, 3, (state, data)) != base
+    assert X.key(trainer, where, 4, (state, data)) != base
+    with monkeypatch.context() as m:
+        m.setenv("XLA_FLAGS", os.environ.get("XLA_FLAGS", "") + " --xla_cpu_enable_fast_math=false")
+        assert X.key(trainer, where, 3, (state, data)) != base
+
+    # from JAX's persistent cache: a program of 5 iterations compiled once into it, then again out of it
+    least = jax.config.jax_persistent_cache_min_compile_time_secs
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+    try:
+        build(StubTrainer(), 5)
+        for f in tmp_path.glob("chunk-*.exe"):
+            f.unlink()
+        monkeypatch.setattr(X, "_LIVE", {})
+        compiled, _, how = build(StubTrainer(), 5)
+    finally:
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", least)
+    assert how == "compiled" and not list(tmp_path.glob("chunk-*.exe"))
 
 
 def test_a_second_evaluation_compiles_nothing(compiles):

@@ -29,10 +29,12 @@ from dexguitar.errors import RunError, TrainingDiverged, UserError
 from dexguitar.learn import checkpoint as C
 from dexguitar.learn import policy as PO
 from dexguitar.learn.devices import Placement
+from dexguitar.learn.executable import ChunkBuild
 from dexguitar.learn.trainer import Trainer, TrainConfig
 
 SUMMED = ("episodes", "terminations")      # counts (and notes/*, nonfinite/*); f1/* are sums over notes
 MAX_ROLLBACKS = 3                          # non-finite states in a row before giving up
+CPU_ENVS = 512                             # envs from which `train` warns of XLA:CPU's LAPACK deadlock
 RESUME_FREE = ("iterations", "iterations_per_call")   # may change on --resume; nothing else may
 TRAIN_DEFAULTS = {f.name: f.default for f in dataclasses.fields(TrainConfig)}
 KEPT = ("params", "obs_norm", "disc_norm", "popart", "key", "iteration")
@@ -229,6 +231,10 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
         raise UserError(f"{cfg.num_envs} envs and minibatches of {cfg.minibatch} do not split evenly over "
                         f"{where.n} devices")
     log = (log or (lambda msg: print(msg, file=sys.stderr))) if where.main else (lambda msg: None)
+    if jax.default_backend() == "cpu" and cfg.num_envs >= CPU_ENVS:
+        log(f"warning: {cfg.num_envs} envs on a CPU: XLA:CPU's batched Cholesky factorizations (MJX) can wait on "
+            "each other forever at this size (seen with 512 envs on 2 cores, experiments/cpu_lapack_hang.py); the "
+            "CPU configs use 4 (experiments/cpu_smoke.py)")
     run = RunDir(out_dir, where.main)
     try:
         record = json.loads(json.dumps({  # as config.json holds it (tuples become lists)
@@ -240,6 +246,12 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
             run.check_resume(record)
         else:
             check_out(run.path, resume=False)         # for callers that did not check (the pipeline, tests)
+        if init_from and not (resume and (has_ckpt or has_compact)):     # checked before anything compiles
+            meta_init = check_init(init_from, cfg.hand, trainer.env.config.feedforward
+                                   or trainer.env.config.right_feedforward, cfg.action_scale)
+        done = resume and max(C.latest_step(run.ckpt) or 0, C.latest_step(run.compact) or 0) >= iterations
+        data = where.put(trainer.data, where.replicated(trainer.data))
+        build = None if done else chunk_build(trainer, where, data, log)    # compiles beside `init` below
         state = trainer.init()
         shardings = where.shardings(state)
         if resume and has_ckpt:            # restored straight into this run's placement, whatever the saved one
@@ -254,8 +266,6 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
             log(f"resumed {run.path} at iteration {step} from its compact state (envs, replay buffers and Adam "
                 "start afresh)")
         elif init_from:
-            meta_init = check_init(init_from, cfg.hand, trainer.env.config.feedforward
-                                   or trainer.env.config.right_feedforward, cfg.action_scale)
             params = PO.load(init_from)[0]
             state = state.replace(params=dict(state.params, policy=params["policy"]), obs_norm=params["obs_norm"])
             log(f"policy initialized from {init_from} ({meta_init.get('samples', 0):,} samples)")
@@ -266,23 +276,31 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
         if where.n > 1:
             log(f"{where.n} devices: {cfg.num_envs // where.n} envs and minibatches of {cfg.minibatch // where.n} "
                 f"samples each")
-        return _loop(trainer, run, where, where.put(state, shardings), iterations,
+        return _loop(trainer, run, where, where.put(state, shardings), data, build, iterations,
                      progress and where.main, stop_after_calls, max_minutes, on_call, log)
     finally:
         run.close()
 
 
-def _loop(trainer, run, where, state, iterations, progress, stop_after_calls, max_minutes, on_call, log) -> dict:
+def chunk_build(trainer, where, data, log) -> ChunkBuild:
+    """Start getting the compiled training chunk for the state `trainer.init()` will make, placed by `where`."""
+    shapes = trainer.state_shapes
+    state = jax.tree.map(lambda s, sharding: jax.ShapeDtypeStruct(s.shape, s.dtype, sharding=sharding), shapes,
+                         where.shardings(shapes))
+    return ChunkBuild(trainer, where, trainer.config.iterations_per_call, state, data, log)
+
+
+def _loop(trainer, run, where, state, data, build, iterations, progress, stop_after_calls, max_minutes, on_call,
+          log) -> dict:
     cfg = trainer.config
     n = cfg.iterations_per_call
     if int(state.iteration) >= iterations:
         log(f"{run.path}: all {iterations} iterations are done")
         return {"iteration": int(state.iteration), "calls": 0, "compile_s": 0.0}
-    data = where.put(trainer.data, where.replicated(trainer.data))
-    t_start = time.perf_counter()                 # `max_minutes` counts the compilation too
-    chunk = trainer.make_train_chunk(n, where).lower(state, data).compile()
-    compile_s = time.perf_counter() - t_start
-    log(f"compiled the training chunk in {compile_s:.1f} s")
+    build = build or chunk_build(trainer, where, data, log)
+    t_start = build.start                         # `max_minutes` counts the compilation too
+    chunk, compile_s, how = build.result()
+    log(f"{how} the training chunk in {compile_s:.1f} s" + (f" from {build.path}" if how == "loaded" else ""))
     bar = None
     if progress:
         from tqdm import tqdm          # noqa: PLC0415 - only for a progress display

@@ -193,6 +193,11 @@ class Trainer:
         return {"songs": self.env.songs}
 
     @functools.cached_property
+    def state_shapes(self):
+        """The first state's shapes and dtypes (`jax.ShapeDtypeStruct`s), without computing it."""
+        return jax.eval_shape(self.init)
+
+    @functools.cached_property
     def _init_program(self):
         return jax.jit(self.initial_state)
 
@@ -426,7 +431,7 @@ class Trainer:
         every call runs the one compiled program. Its first trace starts from empty caches (`tracing`), so that
         program is the same for every song of a capacity, whatever the process traced before."""
         placement = placement or Placement()
-        state = placement.shardings(jax.eval_shape(self.init))
+        state = placement.shardings(self.state_shapes)
 
         def chunk(ts, data):
             ts, metrics = jax.lax.scan(lambda s, _: self.iteration(s, data), ts, None, length=n)

@@ -1,0 +1,161 @@
+"""The training chunk's compiled program, ready sooner (issue 10, "compile once").
+
+- A first run compiles the chunk in a thread while the main thread makes the first state. The chunk needs only the
+  state's shapes (`jax.eval_shape`), and XLA compiles outside Python's lock, so the two compiles overlap. On one H100,
+  a GSync chunk was ready after 66-70 s instead of 96 s (`experiments/compile_overlap.py`).
+- The compiled chunk is kept on disk beside JAX's persistent cache (`<cache>/chunks/`). A later run of the same code,
+  package versions, devices, XLA flags, config and shapes loads it without tracing or lowering it: 11 s from start
+  to a ready chunk instead of 24 s. A later run in the same process reuses it.
+
+The file's key hashes everything the program is made of except the values of its arguments (songs, reference
+motion, frozen policies): the package's files, the versions, the devices, the trainer's config and policy specs,
+and the arguments' shapes. The chunk closes over nothing else (`trainer.Data`).
+"""
+from __future__ import annotations
+
+import collections
+import concurrent.futures
+import dataclasses
+import functools
+import hashlib
+import importlib.metadata
+import json
+import os
+import pickle
+import re
+import sys
+import threading
+import time
+from pathlib import Path
+
+import jax
+from jax.experimental import serialize_executable
+
+PACKAGES = ("jax", "jaxlib", "jax-cuda12-plugin", "jax-cuda13-plugin", "mujoco", "mujoco-mjx", "flax", "optax",
+            "numpy")
+KEEP = 4            # chunk files kept in the cache directory, the newest first
+NO_RESAVE = ("cpu",)    # backends whose executables loaded from JAX's persistent cache are not kept (`_HITS`)
+LOAD_EVENT = "/dexguitar/chunk/load_duration"     # beside JAX's compile events, for those who count them
+# The chunks this process compiled or loaded, by key: a second run of a key in one process (`dexguitar songs`, the
+# next song of a capacity) takes its chunk from here.
+_LIVE: dict = {}
+# Persistent-cache hits per thread. An XLA:CPU executable that JAX loaded from its persistent cache serializes
+# without its machine code (18.5 MB instead of 22.5 MB for the tiny CPU chunk), and what loads from that file fails
+# at its first call ("Function iota_convert_fusion not found"): such a chunk is not kept.
+_HITS: collections.Counter = collections.Counter()
+jax.monitoring.register_event_listener(
+    lambda name, **kw: _HITS.update([threading.get_ident()]) if name == "/jax/compilation_cache/cache_hits" else None)
+
+
+@functools.cache
+def source_digest() -> str:
+    """A digest of every file of the installed `dexguitar` package (its code makes the program)."""
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256()
+    for path in sorted(root.rglob("*")):
+        if path.is_file() and "__pycache__" not in path.parts:
+            h.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes())
+    return h.hexdigest()
+
+
+def _versions() -> dict:
+    out = {}
+    for name in PACKAGES:
+        try:
+            out[name] = importlib.metadata.version(name)
+        except importlib.metadata.PackageNotFoundError:
+            pass
+    return out
+
+
+def key(trainer, where, n: int, args) -> str:
+    """The chunk file's name for `trainer.make_train_chunk(n, where)` lowered with `args` (state, data)."""
+    leaves = [(tuple(x.shape), str(x.dtype), str(getattr(x, "sharding", None))) for x in jax.tree.leaves(args)]
+    parts = {
+        "source": source_digest(), "versions": _versions(), "python": sys.version.split()[0],
+        "devices": [str(d.device_kind) for d in where.mesh.devices.flat], "backend": jax.default_backend(),
+        "xla_flags": os.environ.get("XLA_FLAGS", ""), "x64": bool(jax.config.jax_enable_x64),
+        "trainer": type(trainer).__qualname__, "train": dataclasses.asdict(trainer.config),
+        "env": dataclasses.asdict(trainer.env.config), "spec": repr(trainer.spec), "iterations": n,
+        "sources": {k: {m: v for m, v in meta.items() if m != "path"}
+                    for k, meta in getattr(trainer, "sources", {}).items()},
+        "tree": re.sub(r" at 0x[0-9a-f]+", "", str(jax.tree.structure(args))),    # MJX's static arrays' wrappers
+        "leaves": leaves,
+    }
+    return hashlib.sha256(json.dumps(parts, sort_keys=True, default=str).encode()).hexdigest()[:40]
+
+
+def directory() -> Path | None:
+    """Where chunk files live: `chunks/` in JAX's persistent cache directory (none without one)."""
+    cache = jax.config.jax_compilation_cache_dir
+    return Path(cache) / "chunks" if cache else None
+
+
+class ChunkBuild:
+    """The compiled chunk of a run, started now and ready at `result()`: loaded from its file, or traced and
+    lowered here (on the calling thread: tracing is Python) and compiled in a thread, then saved. Start it before
+    `trainer.init()`, so that the first state's compile runs beside the chunk's.
+
+    `state` may be abstract (`jax.ShapeDtypeStruct` with shardings); `data` is the placed `trainer.data`."""
+
+    def __init__(self, trainer, where, n: int, state, data, log=lambda msg: None):
+        self.start = time.perf_counter()
+        self.log = log
+        self._lower = lambda: trainer.make_train_chunk(n, where).lower(state, data)
+        self.key = key(trainer, where, n, (state, data))
+        folder = directory() if jax.process_count() == 1 else None
+        self.path = folder / f"chunk-{self.key}.exe" if folder else None
+        self._pool = concurrent.futures.ThreadPoolExecutor(1)
+        if self.key in _LIVE:
+            self.how = "reused"
+            self._future = self._pool.submit(_LIVE.get, self.key)
+        elif self.path is not None and self.path.exists():
+            self.how = "loaded"
+            self._future = self._pool.submit(self._load)
+        else:
+            self.how = "compiled"
+            self._future = self._pool.submit(self._compile, self._lower())
+
+    def _load(self):
+        try:
+            with open(self.path, "rb") as f:
+                compiled = serialize_executable.deserialize_and_load(*pickle.load(f))
+            os.utime(self.path)                     # recently used: kept by `_prune`
+            jax.monitoring.record_event_duration_secs(LOAD_EVENT, time.perf_counter() - self.start)
+            return compiled
+        except Exception as err:        # noqa: BLE001 - a stale or broken file: compile instead (in `result`)
+            self.log(f"could not load {self.path} ({type(err).__name__}: {err}); compiling the chunk")
+            return None
+
+    def _compile(self, lowered):
+        hits = _HITS[threading.get_ident()]
+        compiled = lowered.compile()
+        if _HITS[threading.get_ident()] > hits and jax.default_backend() in NO_RESAVE:
+            return compiled
+        if self.path is not None:
+            try:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                tmp = self.path.with_suffix(f".{os.getpid()}.tmp")
+                with open(tmp, "wb") as f:
+                    pickle.dump(serialize_executable.serialize(compiled), f)
+                os.replace(tmp, self.path)
+                _prune(self.path.parent)
+            except Exception as err:    # noqa: BLE001 - a cache that cannot be written only costs the next run time
+                self.log(f"could not keep the compiled chunk in {self.path.parent} ({type(err).__name__}: {err})")
+        return compiled
+
+    def result(self):
+        """(compiled chunk, seconds since the start, how: "compiled", "loaded" from its file, or "reused" from
+        earlier in this process)."""
+        compiled = self._future.result()
+        self._pool.shutdown()
+        if compiled is None:                        # the file did not load
+            compiled, self.how = self._compile(self._lower()), "compiled"
+        _LIVE[self.key] = compiled
+        return compiled, time.perf_counter() - self.start, self.how
+
+
+def _prune(folder: Path) -> None:
+    files = sorted(folder.glob("chunk-*.exe"), key=lambda p: p.stat().st_mtime, reverse=True)
+    for old in files[KEEP:]:
+        old.unlink(missing_ok=True)
