@@ -2,10 +2,11 @@
 
 - A first run compiles the chunk in a thread while the main thread makes the first state. The chunk needs only the
   state's shapes (`jax.eval_shape`), and XLA compiles outside Python's lock, so the two compiles overlap. On one H100,
-  a GSync chunk was ready after 66-70 s instead of 96 s (`experiments/compile_overlap.py`).
+  a GSync chunk was compiled 66 s after the trainer was built instead of 92 s (`experiments/compile_overlap.py`).
 - The compiled chunk is kept on disk beside JAX's persistent cache (`<cache>/chunks/`). A later run of the same code,
-  package versions, devices, XLA flags, config and shapes loads it without tracing or lowering it: 11 s from start
-  to a ready chunk instead of 24 s. A later run in the same process reuses it.
+  package versions, devices, XLA flags, config and shapes loads it without tracing or lowering it: ready 10.1 s after
+  the trainer was built instead of 24.3 s (`experiments/device/chunk_cache.sh`). A later run in the same process
+  reuses it.
 
 The file's key hashes everything the program is made of except the values of its arguments (songs, reference
 motion, frozen policies): the package's files, the versions, the devices, the trainer's config and policy specs,
@@ -49,7 +50,8 @@ jax.monitoring.register_event_listener(
 
 @functools.cache
 def source_digest() -> str:
-    """A digest of every file of the installed `dexguitar` package (its code makes the program)."""
+    """A digest of every file of the installed `dexguitar` package (its code makes the program), read once per
+    process: a chunk this process compiles comes from the code it imported."""
     root = Path(__file__).resolve().parents[1]
     h = hashlib.sha256()
     for path in sorted(root.rglob("*")):
