@@ -49,9 +49,8 @@ def main(song_file: str, mode: str, envs: int = 0) -> dict:
     data = where.put(trainer.data, where.replicated(trainer.data))
     mark("built")
     chunk = trainer.make_train_chunk(cfg.iterations_per_call, where)
-    shardings = where.shardings(jax.eval_shape(trainer.init))
-    abstract = jax.tree.map(lambda s, sh: jax.ShapeDtypeStruct(s.shape, s.dtype, sharding=sh),
-                            jax.eval_shape(trainer.init), shardings)
+    abstract = where.placed_shapes(trainer.state_shapes)
+    shardings = where.shardings(abstract)
     if mode == "load":
         from jax.experimental import serialize_executable as SE
         with open(exe, "rb") as f:

@@ -196,9 +196,7 @@ def test_two_songs_of_a_capacity_share_one_program_whatever_was_traced_between(t
     where = Placement()
 
     def lowered(t):     # (characters, private functions, digest) of the chunk `train` compiles for t
-        shapes = jax.eval_shape(t.init)                    # as `train` places it, without computing it
-        state = jax.tree.map(lambda s, sharding: jax.ShapeDtypeStruct(s.shape, s.dtype, sharding=sharding), shapes,
-                             where.shardings(shapes))
+        state = where.placed_shapes(jax.eval_shape(t.init))      # as `train` places it, without computing it
         text = t.make_train_chunk(1, where).lower(state, where.put(t.data, where.replicated(t.data))).as_text()
         return len(text), text.count("func.func private"), hashlib.sha1(text.encode()).hexdigest()
     first = lowered(trainer)

@@ -28,6 +28,12 @@ class Placement:
         split = NamedSharding(self.mesh, PartitionSpec("envs"))
         return jax.tree.map(lambda _: self.whole, state).replace(env=jax.tree.map(lambda _: split, state.env))
 
+    def placed_shapes(self, shapes):
+        """A `TrainState`'s shapes (`jax.eval_shape`) with this placement's shardings: what a program is lowered
+        with before the state exists."""
+        return jax.tree.map(lambda s, sharding: jax.ShapeDtypeStruct(s.shape, s.dtype, sharding=sharding), shapes,
+                            self.shardings(shapes))
+
     def replicated(self, tree):
         return jax.tree.map(lambda _: self.whole, tree)
 

@@ -120,10 +120,11 @@ class ChunkBuild:
 
     def _load(self):
         try:
+            t = time.perf_counter()
             with open(self.path, "rb") as f:
                 compiled = serialize_executable.deserialize_and_load(*pickle.load(f))
             os.utime(self.path)                     # recently used: kept by `_prune`
-            jax.monitoring.record_event_duration_secs(LOAD_EVENT, time.perf_counter() - self.start)
+            jax.monitoring.record_event_duration_secs(LOAD_EVENT, time.perf_counter() - t)
             return compiled
         except Exception as err:        # noqa: BLE001 - a stale or broken file: compile instead (in `result`)
             self.log(f"could not load {self.path} ({type(err).__name__}: {err}); compiling the chunk")

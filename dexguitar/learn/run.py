@@ -240,8 +240,8 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
         record = json.loads(json.dumps({  # as config.json holds it (tuples become lists)
             "train": dataclasses.asdict(cfg), "env": dataclasses.asdict(trainer.env.config),
             "columns": list(trainer.columns), "songs_digest": songs_digest(trainer.data.songs), **(meta or {})}))
-        has_ckpt = C.latest_step(run.ckpt) is not None
-        has_compact = C.latest_step(run.compact) is not None
+        ckpt_step, compact_step = C.latest_step(run.ckpt), C.latest_step(run.compact)
+        has_ckpt, has_compact = ckpt_step is not None, compact_step is not None
         if resume:
             run.check_resume(record)
         else:
@@ -249,7 +249,7 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
         if init_from and not (resume and (has_ckpt or has_compact)):     # checked before anything compiles
             meta_init = check_init(init_from, cfg.hand, trainer.env.config.feedforward
                                    or trainer.env.config.right_feedforward, cfg.action_scale)
-        done = resume and max(C.latest_step(run.ckpt) or 0, C.latest_step(run.compact) or 0) >= iterations
+        done = resume and (ckpt_step if has_ckpt else compact_step or 0) >= iterations     # as restored below
         data = where.put(trainer.data, where.replicated(trainer.data))
         build = None if done else chunk_build(trainer, where, data, log)    # compiles beside `init` below
         state = trainer.init()
@@ -284,10 +284,8 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
 
 def chunk_build(trainer, where, data, log) -> ChunkBuild:
     """Start getting the compiled training chunk for the state `trainer.init()` will make, placed by `where`."""
-    shapes = trainer.state_shapes
-    state = jax.tree.map(lambda s, sharding: jax.ShapeDtypeStruct(s.shape, s.dtype, sharding=sharding), shapes,
-                         where.shardings(shapes))
-    return ChunkBuild(trainer, where, trainer.config.iterations_per_call, state, data, log)
+    return ChunkBuild(trainer, where, trainer.config.iterations_per_call, where.placed_shapes(trainer.state_shapes),
+                      data, log)
 
 
 def _loop(trainer, run, where, state, data, build, iterations, progress, stop_after_calls, max_minutes, on_call,
@@ -297,7 +295,6 @@ def _loop(trainer, run, where, state, data, build, iterations, progress, stop_af
     if int(state.iteration) >= iterations:
         log(f"{run.path}: all {iterations} iterations are done")
         return {"iteration": int(state.iteration), "calls": 0, "compile_s": 0.0}
-    build = build or chunk_build(trainer, where, data, log)
     t_start = build.start                         # `max_minutes` counts the compilation too
     chunk, compile_s, how = build.result()
     log(f"{how} the training chunk in {compile_s:.1f} s" + (f" from {build.path}" if how == "loaded" else ""))
