@@ -620,6 +620,7 @@ LATEST = 20
 PAIR = 10               # a finger pressing strings s and s + 1 (0-based) at one fret: "string" PAIR + s (version 7)
 BARRE = 20              # the index across all six strings at one fret: "string" BARRE (version 12)
 BARRE_POSITIONS = 100   # hand position BARRE_POSITIONS + k: the barre hand at fret k (`ScriptedLeft.barre_position`)
+_SOLVED: dict[tuple, tuple[dict, dict, dict]] = {}    # `ScriptedLeft`'s solves from version 5 on, per process
 
 
 def strings_of(s: int) -> tuple:
@@ -671,10 +672,20 @@ class ScriptedLeft:
         self.guitar = GUITAR
         self.kin = HandKinematics("left")
         self.posture = POSTURE
-        self._positions: dict[int, np.ndarray] = {}
-        self._fingers: dict[tuple, np.ndarray] = {}
-        self._trials: dict[tuple, np.ndarray] = {}
+        # Solved hand positions, finger poses and simulated trials. From version 5 on each is a function of its key
+        # and the class's constants alone, so the planners of a process share them (`_SOLVED`): the second song,
+        # or version, planned in a process solves only what the first did not. Before version 5 a position is
+        # solved from the nearest one solved so far, so those planners keep their own.
+        solved = _SOLVED.setdefault(self._constants(), ({}, {}, {})) if version >= 5 else ({}, {}, {})
+        self._positions: dict[int, np.ndarray] = solved[0]
+        self._fingers: dict[tuple, np.ndarray] = solved[1]
+        self._trials: dict[tuple, np.ndarray] = solved[2]
         self._tracker = None
+
+    def _constants(self) -> tuple:
+        """What the solves read besides their keys: the class and its geometry and timing constants."""
+        return (type(self), self.hover, self.press_depth, self.clearance, self.land_frames, self.shift_frames,
+                self.check_frames, self.posture.tobytes())
 
     # --- geometry helpers
     def fret_mid(self, k: int) -> float:
