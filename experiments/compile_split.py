@@ -4,7 +4,9 @@ timed apart. Run it twice with the same DEXGUITAR_CACHE: the first process compi
 
     DEXGUITAR_CACHE=/tmp/xla python experiments/compile_split.py SONG.json [ENVS [RUNS]]
 
-ENVS >= 512 (minibatch 4096), 0 for the config's. RUNS > 0 also times that many calls of the compiled chunk after one
+ENVS >= 512 (minibatch 4096), 0 for the config's. RESET_STUB=1 replaces the auto-reset by one that computes no MJX kinematics (a new window's cursor on the finished
+body): a measurement of what the reset's second kinematics inside every step costs in compile seconds and samples/s,
+not a way to train. RUNS > 0 also times that many calls of the compiled chunk after one
 warm-up call (samples/s), to weigh XLA flags that compile faster against the speed of what they compile. Prints one
 JSON line (seconds). `device/compile_split.sh` ran it three times on an H100 (`results/general_left/session24/
 compile_split/`), `device/compile_flags.sh` once per XLA flag set, each with an empty cache.
@@ -35,8 +37,26 @@ def timed(out: dict, stage: str):
     print(json.dumps({k: round(v, 1) for k, v in out.items()}), file=sys.stderr, flush=True)
 
 
+def stub_reset() -> None:
+    """AutoReset without the fresh state's kinematics: the finished episode's body goes on under a new window."""
+    import jax.numpy as jnp
+
+    from dexguitar.envs import wrappers as W
+    from dexguitar.music import cursor as CU
+
+    def step(self, state, action):
+        s = self.env.step(state, action)
+        done = s.done | (s.lifetime >= self.env.config.episode_frames)
+        key, k_win = jax.random.split(s.key)
+        cursor = W.tree_where(done, CU.start(self.env.sample_window(k_win)), s.cursor)
+        return s.replace(cursor=cursor, lifetime=jnp.where(done, 0, s.lifetime), done=done, key=key)
+    W.AutoReset.step = step
+
+
 def main(song_file: str, envs: int = 0, runs: int = 0) -> dict:
     compilation_cache(os.environ.get("DEXGUITAR_CACHE"))
+    if os.environ.get("RESET_STUB"):
+        stub_reset()
     cfg, env_cfg = load_config("experiments/sync_hold.py", hand="duet", num_envs=envs or None)
     if envs:
         cfg = dataclasses.replace(cfg, minibatch=min(cfg.minibatch, envs * cfg.horizon))
@@ -67,7 +87,8 @@ def main(song_file: str, envs: int = 0, runs: int = 0) -> dict:
         speed = {"chunk_s": round(dt, 3),
                  "samples_per_s": round(cfg.num_envs * cfg.horizon * cfg.iterations_per_call / dt)}
     return {"device": jax.devices()[0].device_kind, "envs": cfg.num_envs,
-            "xla_flags": os.environ.get("XLA_FLAGS", ""), **{k: round(v, 1) for k, v in out.items()}, **speed}
+            "xla_flags": os.environ.get("XLA_FLAGS", ""),
+            "reset": "stub" if os.environ.get("RESET_STUB") else "kinematics", **{k: round(v, 1) for k, v in out.items()}, **speed}
 
 
 if __name__ == "__main__":          # planning spawns worker processes: they import this module
