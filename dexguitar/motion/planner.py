@@ -193,7 +193,7 @@ def _clearance(a0, a1, b0, b1, n=9):
 # whose later strings would be picked too late for the planned left hand's press to last 2/3 of the note from the pick
 # (`LeftTiming.lasts`) is quicker, and crosses its first string in the note's first step where the left hand is ready
 # a step before (`ScriptedRight.fit`).
-RIGHT_LATEST = 3
+RIGHT_LATEST = 4
 
 
 @dataclasses.dataclass
@@ -238,7 +238,10 @@ class Sweep:
 class ScriptedRight:
     """The picking hand: the pick point follows strokes across the target strings, found by damped least squares
     on the wrist (slides penalised: they are slow) with the fingers kept in the home grip. `version` (`RIGHT_LATEST`):
-    1 `strokes`, 2 `sweeps`."""
+    1 `strokes`, 2 `sweeps`; in the duet 3 `fit`, and 4 `fit` crosses a note's first string in its step 0 only where
+    the stroke before crossed `early_gap` steps before or more: `flight_of_the_bumblebee1`'s 5-frame lines, moved
+    from step 1 to step 0 of a note after a 5-frame one, left the note before a stroke too short (2.7 frames, 4 steps
+    between crossings) for the simulated pick to cross its string, 4 such notes missed."""
 
     depth = 0.003          # stroke bottom below string height (training needs >= 1 mm, evaluation > 0)
     # version 1
@@ -263,6 +266,8 @@ class ScriptedRight:
     strum_rate = 0.9       # a stroke quickened for the holds takes at least this many steps per string
     pick_lag = 0.4         # the simulated pick crosses a string up to this many steps after the plan does
     early_cross = 0.5      # where that holds more strings, a note's first string is crossed this late in its step 0
+    # version 4
+    early_gap = 4.5        # ... only where the stroke before crossed its first string at least this many steps before
 
     def __init__(self, version: int = RIGHT_LATEST):
         if not 1 <= version <= RIGHT_LATEST:
@@ -450,8 +455,8 @@ class ScriptedRight:
                 room = s.note_end - 1.5 - s.cross - (s.strings - 1)
                 s.cross += float(np.clip(late, 0.0, max(0.0, min(room, self.max_delay))))
         if timing is not None and self.version >= 3:
-            for s in out:
-                self.fit(notes, timing, s)
+            for prev, s in zip([None] + out[:-1], out):
+                self.fit(notes, timing, s, prev)
         for a, s, travel in zip(out[:-1], out[1:], travels):   # strokes shortened to share the time between crossings
             room = s.cross - a.cross - travel
             if room < 2 * self.half_min:
@@ -479,7 +484,7 @@ class ScriptedRight:
         return sum(not timing.lasts(notes.left[i], s, int(np.floor(t + self.pick_lag)), need)
                    for s, t in self.crossings(notes, i, a, b, cross, down, frames).items())
 
-    def fit(self, notes: Notes, timing: LeftTiming, sw: Sweep) -> None:
+    def fit(self, notes: Notes, timing: LeftTiming, sw: Sweep, prev: Sweep | None = None) -> None:
         """A stroke whose later strings would be picked too late for the left hand's press (`short_holds`): quicker,
         down to `strum_rate` steps per string, and its first crossing in the note's step 0 (at `early_cross` of the
         step, so that a tracking lag keeps it in the note) where each string crossed in that step is held as the note
@@ -495,6 +500,8 @@ class ScriptedRight:
         floor = max(2 * self.half_min, self.strum_rate * sw.strings)
         for cross in (sw.cross, onset + self.early_cross):
             if cross < sw.cross and (onset + 0.5 >= sw.cross or onset < 1):
+                continue
+            if cross < sw.cross and self.version >= 4 and prev is not None and cross - prev.cross < self.early_gap:
                 continue
             f = sw.frames
             while f >= floor - 1e-9 and best[0] > 0:
@@ -615,8 +622,10 @@ POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fi
 # that leaves the next note with a hand position change at each end (`ScriptedLeft.squeezes`); and a finger that
 # presses a place in the note before keeps it in the same hand position (`ScriptedLeft.guided`); 20 a finger landing
 # across two strings where the note before presses them lower (a double stop hammered on) lands a frame sooner, where
-# the note before can spare it (`ScriptedLeft.desired`).
-LATEST = 20
+# the note before can spare it (`ScriptedLeft.desired`); 21 a finger that lets go of a place for a note that wants its
+# string open, and presses it again after, hovers over its own fret instead of over that place where it cannot get
+# its tip `open_clear` above the strings there (a stretch beyond its own fret; `ScriptedLeft.configs`).
+LATEST = 21
 PAIR = 10               # a finger pressing strings s and s + 1 (0-based) at one fret: "string" PAIR + s (version 7)
 BARRE = 20              # the index across all six strings at one fret: "string" BARRE (version 12)
 BARRE_POSITIONS = 100   # hand position BARRE_POSITIONS + k: the barre hand at fret k (`ScriptedLeft.barre_position`)
@@ -664,6 +673,7 @@ class ScriptedLeft:
     via_shift = 2           # version 18: shifts of at most this many frets move fingers clear of open strings
     search_limit = 40       # candidate fingerings tried per note, cheapest first
     check_frames = 10       # a fingering is tried by moving to it from the note before, then holding this long
+    open_clear = 0.008      # version 21: a finger hovering over a string its note wants open keeps its tip this high
 
     def __init__(self, version: int = LATEST):
         if not 1 <= version <= LATEST:
@@ -1205,14 +1215,21 @@ class ScriptedLeft:
                     continue
                 nxt = next(((ahead[j][1][f]) for j in range(i + 1, len(plan))
                             if ahead[j][0] == p and f in ahead[j][1]), None)
-                if nxt is None:
-                    hk = min(fret_of(p) + f, g.n_frets)
-                    target = self.hover_point(self.mid_x(hk), hk)
-                else:
-                    target = self.hover_point(float(self.press_point(*nxt, f)[0]), nxt[1])
+                hk = min(fret_of(p) + f, g.n_frets)
+                home = self.hover_point(self.mid_x(hk), hk)
+                target = home if nxt is None else self.hover_point(float(self.press_point(*nxt, f)[0]), nxt[1])
                 q[FINGER_DOFS[f]] = self.finger(f, p, _key(target), False)
+                if (self.version >= 21 and nxt is not None and nxt[0] < BARRE and i > 0 and plan[i - 1][0] == p
+                        and plan[i - 1][1].get(f) == nxt and any(notes.left[i][j] < 0 for j in strings_of(nxt[0]))
+                        and self.tip_height(q, f) < self.open_clear):
+                    q[FINGER_DOFS[f]] = self.finger(f, p, _key(home), False)
             out.append((q, vias))
         return out
+
+    def tip_height(self, q: np.ndarray, f: int) -> float:
+        """Finger f's tip axis above the strings' plane in pose q."""
+        self.kin.set(q)
+        return float(self.kin.site(self.kin.hand.tips[f])[2] - self.guitar.string_z)
 
     def desired(self, notes: Notes) -> np.ndarray:
         """(T + 1, 27) joint targets. Row j is the pose after control step j - 1; note i owns rows onset_i + 1 ..
