@@ -192,7 +192,7 @@ def _clearance(a0, a1, b0, b1, n=9):
 # first string is crossed as soon as the simulated left hand holds the note (`ready_lag`); 3 and in the duet a stroke
 # whose later strings would be picked too late for the planned left hand's press to last 2/3 of the note from the pick
 # (`LeftTiming.lasts`) is quicker, and crosses its first string in the note's first step where the left hand is ready
-# a step before (`ScriptedRight.fit`).
+# a step before (`ScriptedRight.fit`); 4 and only where the stroke before crossed `early_gap` steps before or more.
 RIGHT_LATEST = 4
 
 
@@ -238,10 +238,9 @@ class Sweep:
 class ScriptedRight:
     """The picking hand: the pick point follows strokes across the target strings, found by damped least squares
     on the wrist (slides penalised: they are slow) with the fingers kept in the home grip. `version` (`RIGHT_LATEST`):
-    1 `strokes`, 2 `sweeps`; in the duet 3 `fit`, and 4 `fit` crosses a note's first string in its step 0 only where
-    the stroke before crossed `early_gap` steps before or more: `flight_of_the_bumblebee1`'s 5-frame lines, moved
-    from step 1 to step 0 of a note after a 5-frame one, left the note before a stroke too short (2.7 frames, 4 steps
-    between crossings) for the simulated pick to cross its string, 4 such notes missed."""
+    1 `strokes`, 2 `sweeps`, 3 and 4 `fit` in the duet. Version 4's `early_gap`: in `flight_of_the_bumblebee1`'s
+    5-frame lines a crossing moved into step 0 after a 5-frame note left that note a stroke too short (2.7 frames, 4
+    steps between crossings) for the simulated pick to cross its string; 4 such notes were missed."""
 
     depth = 0.003          # stroke bottom below string height (training needs >= 1 mm, evaluation > 0)
     # version 1
@@ -673,7 +672,7 @@ class ScriptedLeft:
     via_shift = 2           # version 18: shifts of at most this many frets move fingers clear of open strings
     search_limit = 40       # candidate fingerings tried per note, cheapest first
     check_frames = 10       # a fingering is tried by moving to it from the note before, then holding this long
-    open_clear = 0.008      # version 21: a finger hovering over a string its note wants open keeps its tip this high
+    open_clear = 0.008      # version 21: a finger lifted off a string its note wants open keeps its tip this high
 
     def __init__(self, version: int = LATEST):
         if not 1 <= version <= LATEST:
