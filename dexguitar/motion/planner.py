@@ -479,9 +479,12 @@ class ScriptedRight:
                     frames: float | None = None) -> int:
         """How many of note i's picked strings (a..b) a stroke (`crossings`) would pick too late for the left hand's
         press to last 2/3 of the note from the pick (the simulated pick `pick_lag` behind the plan)."""
+        return self._late(notes, timing, i, self.crossings(notes, i, a, b, cross, down, frames))
+
+    def _late(self, notes: Notes, timing: LeftTiming, i: int, times: dict) -> int:
+        """`short_holds` of note i's crossing `times` ({string: planned time})."""
         need = scoring.hold_frames(int(notes.onset[i + 1] - notes.onset[i]))
-        return sum(not timing.lasts(notes.left[i], s, int(np.floor(t + self.pick_lag)), need)
-                   for s, t in self.crossings(notes, i, a, b, cross, down, frames).items())
+        return sum(not timing.lasts(notes.left[i], s, int(np.floor(t + self.pick_lag)), need) for s, t in times.items())
 
     def fit(self, notes: Notes, timing: LeftTiming, sw: Sweep, prev: Sweep | None = None) -> None:
         """A stroke whose later strings would be picked too late for the left hand's press (`short_holds`): quicker,
@@ -506,7 +509,7 @@ class ScriptedRight:
             while f >= floor - 1e-9 and best[0] > 0:
                 times = self.crossings(notes, i, a, b, cross, down, f)
                 safe = all(timing.lasts(notes.left[i], s, onset - 1, 2) for s, t in times.items() if t < onset + 1)
-                k = self.short_holds(notes, timing, i, a, b, cross, down, f)
+                k = self._late(notes, timing, i, times)
                 if k < best[0] and (cross == sw.cross or safe):
                     best = (k, cross, f)
                 f -= 0.5
