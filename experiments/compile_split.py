@@ -4,12 +4,13 @@ timed apart. Run it twice with the same DEXGUITAR_CACHE: the first process compi
 
     DEXGUITAR_CACHE=/tmp/xla python experiments/compile_split.py SONG.json [ENVS [RUNS]]
 
-ENVS >= 512 (minibatch 4096), 0 for the config's. RESET_STUB=1 replaces the auto-reset by one that computes no MJX kinematics (a new window's cursor on the finished
-body): a measurement of what the reset's second kinematics inside every step costs in compile seconds and samples/s,
-not a way to train. RUNS > 0 also times that many calls of the compiled chunk after one
-warm-up call (samples/s), to weigh XLA flags that compile faster against the speed of what they compile. Prints one
-JSON line (seconds). `device/compile_split.sh` ran it three times on an H100 (`results/general_left/session24/
-compile_split/`), `device/compile_flags.sh` once per XLA flag set, each with an empty cache.
+ENVS >= 512 (minibatch 4096), 0 for the config's. RUNS > 0 also times that many calls of the compiled chunk after one
+warm-up call (samples/s), to weigh XLA flags that compile faster against the speed of what they compile.
+RESET_STUB=1 replaces the auto-reset by one that computes no MJX kinematics (a new window's cursor on the finished
+body): what the reset's second kinematics inside every step costs in compile seconds and samples/s, not a way to
+train. Prints one JSON line (seconds). `device/compile_split.sh` ran it three times on an H100
+(`results/general_left/session24/compile_split/`), `device/compile_flags.sh` once per XLA flag set,
+`device/reset_cost.sh` with and without the stub, each with an empty cache.
 """
 import contextlib
 import dataclasses
@@ -88,7 +89,8 @@ def main(song_file: str, envs: int = 0, runs: int = 0) -> dict:
                  "samples_per_s": round(cfg.num_envs * cfg.horizon * cfg.iterations_per_call / dt)}
     return {"device": jax.devices()[0].device_kind, "envs": cfg.num_envs,
             "xla_flags": os.environ.get("XLA_FLAGS", ""),
-            "reset": "stub" if os.environ.get("RESET_STUB") else "kinematics", **{k: round(v, 1) for k, v in out.items()}, **speed}
+            "reset": "stub" if os.environ.get("RESET_STUB") else "kinematics",
+            **{k: round(v, 1) for k, v in out.items()}, **speed}
 
 
 if __name__ == "__main__":          # planning spawns worker processes: they import this module

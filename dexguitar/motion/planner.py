@@ -426,8 +426,8 @@ class ScriptedRight:
         return out
 
     def sweeps(self, notes: Notes, earliest=None) -> tuple[list[Sweep], float]:
-        """The strokes of versions 2 and 3 and the string coordinate of the home pick. earliest: None (alone), each note's
-        first step at which its strings may be crossed, or a `LeftTiming` (the duet)."""
+        """The strokes of versions 2 to 4 and the string coordinate of the home pick. earliest: None (alone), each
+        note's first step at which its strings may be crossed, or a `LeftTiming` (the duet)."""
         timing = earliest if isinstance(earliest, LeftTiming) else None
         earliest = timing.ready if timing is not None else earliest
         sigma0 = self.sigma_of(self.pick0[0])
