@@ -10,7 +10,7 @@ import argparse
 import numpy as np
 
 from dexguitar.cli import load_song
-from dexguitar.envs import as_batch
+from dexguitar.envs import EnvConfig, as_batch
 from dexguitar.motion import feedforward as FF
 from dexguitar.motion.planner import LATEST, ScriptedLeft, ScriptedRight
 from dexguitar.music import timeline as TL
@@ -22,8 +22,9 @@ def main() -> None:
     p.add_argument("notes", nargs="+", type=int)
     args = p.parse_args()
     songs = as_batch([TL.from_song(load_song(args.song))])
-    notes = FF.song_notes(songs, 0, 5)                   # row 0: the grace rest before the first note
-    keys, found = FF.plan_songs(songs, 5, version=LATEST)
+    rest = EnvConfig().count_in                        # row 0: the count-in before the first note
+    notes = FF.song_notes(songs, 0, rest)
+    keys, found = FF.plan_songs(songs, rest, version=LATEST)
     timing = ScriptedLeft().timing(notes, found[keys[0]][1])
     strokes = {s.note: s for s in ScriptedRight().sweeps(notes, timing)[0]}
     for r in args.notes:

@@ -1,5 +1,7 @@
 """The scripted player through the envs: hand-made motions that put fingertips on the press targets and sweep the pick
 across the target strings must score F1 ~ 1, or geometry, detection, bookkeeping and metrics disagree somewhere."""
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -609,3 +611,18 @@ def test_right_version_4_leaves_the_stroke_before_an_early_crossing_its_time():
     assert steps[3][5] == 0.5 and steps[3][4] == 1.5 and strokes[3][4].frames < 3.5      # 4 steps apart
     assert steps[4] == [1.5] * len(frets) and strokes[4][4].frames > 4.0
     assert steps[3][6:] == steps[4][6:]                  # the second time the line is no quicker: as version 3
+
+
+def test_the_count_in_gives_the_hand_time_to_reach_a_far_first_note():
+    """`flight_of_the_bumblebee1` opens with fret 12 on string 1 in 5-frame notes (1/16 at 180 BPM). From the home pose
+    (the index finger over fret 5) the planned hand moves about 0.15 m along the neck to press it: after the training
+    windows' 5-frame rest it arrives after the first two notes, after the evaluation's 15-frame count-in in time."""
+    notes = [make_note("1/16", [f, -1, -1, -1, -1, -1]) for f in (12, 11, 10, 9, 10, 9, 8, 7)]
+    timeline = TL.from_song(Song(tempo=180, notes=tuple(notes), title="bumblebee's opening"))
+    first = {}
+    for count_in in (5, envs.EnvConfig().count_in):
+        config = dataclasses.replace(envs.EnvConfig(), count_in=count_in).evaluation()
+        assert config.rest_frames == count_in
+        score = ScriptedPlayer(envs.make("left", [timeline], config)).play(0)["left"]
+        first[count_in] = score["per_note"][:2, 2].tolist()           # F1 of the first two notes
+    assert first == {5: [0.0, 0.0], 15: [1.0, 1.0]}, first

@@ -48,6 +48,9 @@ class EnvConfig:
     episode_frames: int = 600            # 10 s at 60 Hz for one hand (reference §3.7); the duet uses 1200
     window_notes: tuple[int, int] = (10, 20)   # n ~ U{10..19}: a rest + n-1 notes per training window (§3.4)
     rest_frames: int = 5                 # grace rest at the start of every window
+    count_in: int = 15                   # evaluation: the rest before a whole song's first note (0.25 s; not the
+                                         # paper's, whose test loops a song: its 5-frame rest from the home pose
+                                         # leaves a first note at fret 12 out of any hand's reach)
     max_note_frames: int = 50            # training notes are capped at 50 frames (§3.3)
     min_frames: int = 5                  # the shortest note lasts at least 5 frames (§3.3)
     shift_prob: float = 0.5              # fret-shift augmentation, keeping the chord shape (paper Sec. 6)
@@ -69,7 +72,7 @@ class EnvConfig:
 
     def evaluation(self) -> "EnvConfig":
         return dataclasses.replace(self, sequential=True, shift_prob=0.0, tempo_prob=0.0, pick_depth=0.0,
-                                   init_noise=0.0)
+                                   init_noise=0.0, rest_frames=self.count_in)
 
     def window_args(self) -> dict:
         """The keyword arguments of `cursor.sample_window`."""
