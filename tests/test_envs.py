@@ -94,21 +94,21 @@ def test_evaluation_plays_the_song_from_its_start_and_stops():
     reset, step = jax.jit(env.reset), jax.jit(env.step)
     state = reset(jax.random.PRNGKey(0), 0)
     w = state.cursor.window
-    # the 5-frame grace rest, then the song: 1/8 at 100 BPM = 18 frames
-    assert int(w.n) == 9 and np.asarray(w.dur)[:9].tolist() == [5] + [18] * 8
+    # the 15-frame count-in, then the song: 1/8 at 100 BPM = 18 frames
+    assert int(w.n) == 9 and np.asarray(w.dur)[:9].tolist() == [15] + [18] * 8
     np.testing.assert_array_equal(np.asarray(w.left)[:9, 1], [0, 1, 3, 5, 6, 8, 6, 5, 3])
     goal = np.asarray(state.obs)[-35:].reshape(5, 7)
-    # slot 0: the rest, timer 5 frames -> 5/20 - 1 = -0.75; slot 1: string 2 at fret 1 -> 1/22, 18 frames -> -0.1
-    assert goal[0, 1] == 0.0 and goal[0, 6] == pytest.approx(-0.75)
+    # slot 0: the rest, timer 15 frames -> 15/20 - 1 = -0.25; slot 1: string 2 at fret 1 -> 1/22, 18 frames -> -0.1
+    assert goal[0, 1] == 0.0 and goal[0, 6] == pytest.approx(-0.25)
     assert goal[1, 1] == pytest.approx(1 / 22) and goal[1, 6] == pytest.approx(-0.1)
     assert goal[2, 1] == pytest.approx(3 / 22) and goal[1, 0] == 0.0
     ends, first_notes = 0, []
-    for t in range(5 + 8 * 18):
+    for t in range(15 + 8 * 18):
         state = step(state, jnp.zeros(env.action_size))
         if bool(state.info["note_end"]):
             ends += 1
             first_notes.append(int(state.info["song_note"]))
-        if t == 5 + 17:                                                   # the first song note is over
+        if t == 15 + 17:                                                  # the first song note is over
             assert bool(state.info["note_end"]) and int(state.cursor.note) == 2
     assert ends == 9 and first_notes == list(range(-1, 8)) and bool(state.done)
 
