@@ -19,6 +19,7 @@ import dataclasses
 import json
 import os
 import sys
+import traceback
 from pathlib import Path
 
 import jax
@@ -26,6 +27,7 @@ import jax
 from dexguitar import envs
 from dexguitar.envs.bench import bench_env, check_scenes
 from dexguitar.errors import UserError
+from dexguitar.learn.executable import in_flight
 from dexguitar.learn import distill as DI
 from dexguitar.learn import policy as PO
 from dexguitar.learn.run import (check_init, check_out, compilation_cache, load_config, recorded_config, train,
@@ -523,6 +525,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    """The `dexguitar` command (argv None: the process's own arguments; then a failure while a training chunk still
+    compiles ends the process at once, `_leave`)."""
+    leave = _leave if argv is None else (lambda code: code)
     args = build_parser().parse_args(sys.argv[1:] if argv is None else list(argv))
     if getattr(args, "distributed", False):
         jax.distributed.initialize(args.coordinator, args.num_processes, args.process_id)
@@ -533,13 +538,29 @@ def main(argv=None) -> int:
         return args.func(args)
     except UserError as err:
         print(f"error: {err}", file=sys.stderr)
-        return 2
+        return leave(2)
     except OSError as err:             # a file or directory that cannot be read or written: the user's to fix
         print(f"error: {err.filename or ''}: {err.strerror or err}".lstrip(": "), file=sys.stderr)
-        return 2
+        return leave(2)
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
-        return 130
+        return leave(130)
+    except Exception:
+        if argv is not None or not in_flight():
+            raise
+        traceback.print_exc()
+        return leave(1)
+
+
+def _leave(code: int) -> int:
+    """`code`, or, where a training chunk is still compiling in a thread, exit with it at once: Python would wait
+    for that compile at exit (about a minute on a fresh GPU; `learn.executable.in_flight`). The run directory is
+    closed by then (`learn.run`'s `finally`)."""
+    if in_flight():
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    return code
 
 
 if __name__ == "__main__":

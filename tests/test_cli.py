@@ -1,5 +1,7 @@
 """The `dexguitar` command on songs: info, convert, clear errors."""
 import json
+import os
+import sys
 
 import pytest
 
@@ -47,3 +49,31 @@ def test_procedural_material_by_style():
     assert len(material("left", None, 0, 3)) == 3                         # the left hand's default: general
     with pytest.raises(UserError, match="not a left-hand style"):
         material("left", "paper", 0, 2)
+
+
+# A command that fails while a chunk is still compiling in its thread (a sleep of a minute stands for the compile).
+STILL_COMPILING = """
+import concurrent.futures, sys, time
+from dexguitar import cli
+from dexguitar.errors import UserError
+from dexguitar.learn import executable
+executable._submit(concurrent.futures.ThreadPoolExecutor(1), time.sleep, 60)
+def fail(args):
+    raise UserError("a bad song, found after the chunk's compile started")
+cli._check = fail
+sys.argv = ["dexguitar", "check"]
+sys.exit(cli.main())
+"""
+
+
+def test_a_command_that_fails_while_its_chunk_compiles_exits_at_once():
+    """A failure or Ctrl-C after the training chunk's compile started used to wait for that compile at exit (a minute
+    on a fresh GPU); now the process ends at once, with the command's exit code and its error printed."""
+    import subprocess
+    import time
+    t = time.monotonic()
+    done = subprocess.run([sys.executable, "-c", STILL_COMPILING], capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "JAX_PLATFORMS": "cpu"})
+    assert done.returncode == 2, done.stderr
+    assert "error: a bad song" in done.stderr
+    assert time.monotonic() - t < 40          # not the 60 s of the "compile"

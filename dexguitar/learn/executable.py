@@ -46,6 +46,22 @@ _LIVE: dict = {}
 _HITS: collections.Counter = collections.Counter()
 jax.monitoring.register_event_listener(
     lambda name, **kw: _HITS.update([threading.get_ident()]) if name == "/jax/compilation_cache/cache_hits" else None)
+# The chunks being compiled or loaded in a thread now (`in_flight`).
+_PENDING: set = set()
+
+
+def in_flight() -> bool:
+    """Is a chunk still being compiled or loaded? Python waits for such a thread at exit (a minute for a first GPU
+    compile) and a daemon thread inside XLA aborts the process at exit, so `cli.main` leaves at once with `os._exit`
+    when a command fails or is interrupted meanwhile."""
+    return any(not f.done() for f in _PENDING)
+
+
+def _submit(pool, fn, *args):
+    future = pool.submit(fn, *args)
+    _PENDING.add(future)
+    future.add_done_callback(_PENDING.discard)
+    return future
 
 
 @functools.cache
@@ -110,13 +126,13 @@ class ChunkBuild:
         self._pool = concurrent.futures.ThreadPoolExecutor(1)
         if self.key in _LIVE:
             self.how = "reused"
-            self._future = self._pool.submit(_LIVE.get, self.key)
+            self._future = _submit(self._pool, _LIVE.get, self.key)
         elif self.path is not None and self.path.exists():
             self.how = "loaded"
-            self._future = self._pool.submit(self._load)
+            self._future = _submit(self._pool, self._load)
         else:
             self.how = "compiled"
-            self._future = self._pool.submit(self._compile, self._lower())
+            self._future = _submit(self._pool, self._compile, self._lower())
 
     def _load(self):
         try:
