@@ -54,7 +54,7 @@ def in_flight() -> bool:
     """Is a chunk still being compiled or loaded? Python waits for such a thread at exit (a minute for a first GPU
     compile) and a daemon thread inside XLA aborts the process at exit, so `cli.main` leaves at once with `os._exit`
     when a command fails or is interrupted meanwhile."""
-    return any(not f.done() for f in _PENDING)
+    return any(not f.done() for f in list(_PENDING))     # a snapshot: the worker threads discard theirs
 
 
 def _submit(pool, fn, *args):
