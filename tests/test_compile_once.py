@@ -56,13 +56,15 @@ def test_a_later_run_in_the_process_reuses_its_chunk(trainer, tmp_path, monkeypa
 @dataclasses.dataclass(frozen=True)
 class StubConfig:
     scale: float = 2.0
+    seed: int = 0
+    iterations: int = 10
 
 
 class StubTrainer:
     """What `learn.executable` reads of a trainer, around a chunk that compiles in milliseconds."""
 
-    def __init__(self, scale: float = 2.0):
-        self.config, self.env, self.spec, self.traced = StubConfig(scale), StubEnv(), "stub", 0
+    def __init__(self, scale: float = 2.0, **config):
+        self.config, self.env, self.spec, self.traced = StubConfig(scale, **config), StubEnv(), "stub", 0
 
     def make_train_chunk(self, n, where):
         self.traced += 1
@@ -100,7 +102,7 @@ print(json.dumps({"how": how, "traced": trainer.traced,
 def test_a_chunk_file_loads_in_a_new_process_without_tracing(tmp_path, monkeypatch):
     """The first build of a chunk keeps it in a file; a new process loads it without tracing it and computes the
     same; a file that does not load is compiled again; another config, other XLA flags or another number of
-    iterations per call is another file; on XLA:CPU a chunk that came from JAX's persistent cache is not kept."""
+    iterations per call is another file, another seed or run length is not; on XLA:CPU a chunk that came from JAX's persistent cache is not kept."""
     import subprocess
     import sys
     from dexguitar.learn import executable as X
@@ -138,6 +140,8 @@ def test_a_chunk_file_loads_in_a_new_process_without_tracing(tmp_path, monkeypat
     where = Placement()
     base = X.key(trainer, where, 3, (state, data))
     assert X.key(StubTrainer(3.0), where, 3, (state, data)) != base
+    # what the chunk does not read: another seed or a longer run loads the same file
+    assert X.key(StubTrainer(seed=7, iterations=99), where, 3, (state, data)) == base
     assert X.key(trainer, where, 4, (state, data)) != base
     with monkeypatch.context() as m:
         m.setenv("XLA_FLAGS", os.environ.get("XLA_FLAGS", "") + " --xla_cpu_enable_fast_math=false")

@@ -19,6 +19,8 @@ def test_four_devices_match_one_and_a_four_device_run_resumes_on_one(tmp_path):
     assert done.returncode == 0, done.stderr[-3000:]
     out = json.loads(done.stdout.strip().splitlines()[-1])
     assert out["devices"] == 4
+    assert out["split"] == ["4 devices: 1 envs and minibatches of 2 samples each"]
+    assert out["chunks"][2] == "reused"              # the resumed run plays the 1-device run's program
     assert out["moved"] > 1e-4                       # the update did change the parameters ...
     assert out["max_diff"] < 1e-5                    # ... and identically on 1 and 4 devices (atol 1e-5)
     assert out["iterations"] == [1, 2] and out["second"] == 2

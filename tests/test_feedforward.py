@@ -2,6 +2,10 @@
 must play exactly as the scripted player does, and a training window must start in its planned state and read the
 plan frame by frame, or the feedforward belongs to other notes than the ones being played."""
 import os
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import jax
 import jax.numpy as jnp
@@ -119,6 +123,35 @@ def test_plans_are_made_with_one_blas_thread_even_for_one_song(monkeypatch):
     out, used = FF.in_processes(os.getenv, ["OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"], workers=1)
     assert out == ["1", "1"] and used == 1
     assert os.environ["OPENBLAS_NUM_THREADS"] == "2"                         # the caller's own setting is back
+
+
+def worker_pid(_) -> int:
+    return os.getpid()
+
+
+def test_a_kept_pool_plans_the_next_songs_in_the_same_workers_and_leaves_with_its_parent(tmp_path):
+    """Planning reuses its worker processes between calls (a fresh worker costs seconds of imports and planner
+    set-up), except for the left planner before version 5, whose plans depend on what its worker solved before; the
+    workers of a process that leaves without shutting them down (`os._exit`, a kill) leave too."""
+    first, _ = FF.in_processes(worker_pid, [None], workers=1, keep=True)
+    again, _ = FF.in_processes(worker_pid, [None], workers=1, keep=True)
+    fresh, _ = FF.in_processes(worker_pid, [None], workers=1)
+    assert first == again and fresh != first and os.getpid() not in first + fresh
+    assert FF._reusable((None, None, None, 5)) and not FF._reusable((None, None, None, 4))
+    assert FF._reusable((None, None, None, 4, "right")) and not FF._reusable((None, None, None, 4, "left", None))
+    script = tmp_path / "leave.py"
+    script.write_text("import os\nfrom dexguitar.motion import feedforward as FF\n"
+                      "def pid(_):\n    return os.getpid()\n"
+                      "if __name__ == '__main__':\n"
+                      "    print(FF.in_processes(pid, [None], workers=1, keep=True)[0][0], flush=True)\n"
+                      "    os._exit(0)\n")
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120,
+                          cwd=Path(__file__).resolve().parents[1])
+    worker = int(done.stdout.split()[-1])
+    deadline = time.time() + 20
+    while time.time() < deadline and Path(f"/proc/{worker}").exists():
+        time.sleep(0.5)
+    assert not Path(f"/proc/{worker}").exists() or "zombie" in Path(f"/proc/{worker}/status").read_text().lower()
 
 
 def test_the_residual_flag_travels_with_the_policy():

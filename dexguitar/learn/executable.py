@@ -9,8 +9,8 @@
   reuses it.
 
 The file's key hashes everything the program is made of except the values of its arguments (songs, reference
-motion, frozen policies): the package's files, the versions, the devices, the trainer's config and policy specs,
-and the arguments' shapes. The chunk closes over nothing else (`trainer.Data`).
+motion, frozen policies): the package's files, the versions, the devices, the trainer's config (but the seed and the run's length,
+which the chunk does not read) and policy specs, and the arguments' shapes. The chunk closes over nothing else (`trainer.Data`).
 """
 from __future__ import annotations
 
@@ -32,6 +32,9 @@ from pathlib import Path
 import jax
 from jax.experimental import serialize_executable
 
+# TrainConfig fields that the chunk does not read: the first state's key, the run's length. A second seed or a longer
+# run loads the chunk file of the first.
+OUTSIDE_THE_CHUNK = ("seed", "iterations")
 PACKAGES = ("jax", "jaxlib", "jax-cuda12-plugin", "jax-cuda13-plugin", "mujoco", "mujoco-mjx", "flax", "optax",
             "numpy")
 KEEP = 4            # chunk files kept in the cache directory, the newest first
@@ -93,7 +96,8 @@ def key(trainer, where, n: int, args) -> str:
         "source": source_digest(), "versions": _versions(), "python": sys.version.split()[0],
         "devices": [str(d.device_kind) for d in where.mesh.devices.flat], "backend": jax.default_backend(),
         "xla_flags": os.environ.get("XLA_FLAGS", ""), "x64": bool(jax.config.jax_enable_x64),
-        "trainer": type(trainer).__qualname__, "train": dataclasses.asdict(trainer.config),
+        "trainer": type(trainer).__qualname__,
+        "train": {k: v for k, v in dataclasses.asdict(trainer.config).items() if k not in OUTSIDE_THE_CHUNK},
         "env": dataclasses.asdict(trainer.env.config), "spec": repr(trainer.spec), "iterations": n,
         "sources": {k: {m: v for m, v in meta.items() if m != "path"}
                     for k, meta in getattr(trainer, "sources", {}).items()},

@@ -24,6 +24,7 @@ import hashlib
 import multiprocessing
 import os
 import sys
+import threading
 import time
 import warnings
 from pathlib import Path
@@ -95,26 +96,96 @@ def _planner(role: str, version: int):
     return _PLANNERS[role, version]
 
 
-def in_processes(fn, jobs, workers: int = 0) -> tuple[list, int]:
+# Planning pools kept for the next call (`in_processes(keep=True)`), by worker count: spawning a worker and importing
+# the package in it takes ~2.5 s on a CPU core, and its first plan ~3 s more to build the planner; a warm worker plans
+# the next song in what that plan takes (ode_to_joy: 8 s in a fresh pool, 3 s more in a warm one). A pool idle for
+# IDLE_S is shut down, so that a long training run does not hold a core's worth of idle workers.
+_KEPT: dict = {}
+_KEPT_LOCK = threading.Lock()
+IDLE_S = 120.0
+
+
+def _blas_one_thread():
+    """The environment a planning worker is spawned with: one BLAS thread, JAX on the CPU (see `in_processes`)."""
+    saved = {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                                             "JAX_PLATFORMS")}
+    os.environ.update({k: "1" for k in saved} | {"JAX_PLATFORMS": "cpu"})   # the planner's JAX bits: CPU, not the GPU
+    return saved
+
+
+def _restore(saved: dict) -> None:
+    for k, v in saved.items():
+        if v is None:
+            os.environ.pop(k, None)
+        else:
+            os.environ[k] = v
+
+
+def _follow_parent(parent: int) -> None:
+    """A worker leaves when the process that spawned it is gone: one that ends with `os._exit` (`cli`, Ctrl-C during
+    a compile) or is killed does not shut its pools down, and their workers would wait on them for ever."""
+    def watch():
+        while os.getppid() == parent:
+            time.sleep(1.0)
+        os._exit(0)
+    threading.Thread(target=watch, daemon=True).start()
+
+
+def _new_pool(workers: int):
+    return futures.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),  # never fork JAX
+                                       initializer=_follow_parent, initargs=(os.getpid(),))
+
+
+def _kept_pool(workers: int):
+    """The kept pool of `workers` processes (made now if there is none), its idle timer stopped while it works."""
+    with _KEPT_LOCK:
+        pool, timer = _KEPT.pop(workers, (None, None))
+        if timer is not None:
+            timer.cancel()
+        return pool or _new_pool(workers)
+
+
+def _keep(workers: int, pool) -> None:
+    """Keep `pool` for the next call of its size, for IDLE_S (one pool a size: another call's, made meanwhile, ends)."""
+    def idle():
+        with _KEPT_LOCK:
+            if _KEPT.get(workers, (None, None))[1] is timer:
+                _KEPT.pop(workers)
+                pool.shutdown(wait=False)
+    timer = threading.Timer(IDLE_S, idle)
+    timer.daemon = True
+    with _KEPT_LOCK:
+        if workers in _KEPT:
+            pool.shutdown(wait=False)
+            return
+        _KEPT[workers] = pool, timer
+    timer.start()
+
+
+def in_processes(fn, jobs, workers: int = 0, keep: bool = False) -> tuple[list, int]:
     """([fn(job) for job in jobs], processes used): on `workers` processes (0: one per CPU) with one BLAS thread
     each, never in this process, even for one job. A plan depends on the BLAS thread count: the 15 official songs
     planned with 2 threads and with 1 differed in every song, 11 of them by more than 0.04 of a half range in some
     action (`snow` 0.76). With one thread everywhere a plan is the same on a laptop, in CI and on a 16-core GPU host
-    (where 16 processes of 16 threads each had also run at a load of 150). `fn` must be a module-level function."""
+    (where 16 processes of 16 threads each had also run at a load of 150). `fn` must be a module-level function.
+    keep: the processes stay for the next call with `keep` (`_KEPT`); only for work whose result does not depend on
+    what a worker did before (`_reusable`)."""
     workers = max(1, min(workers or os.cpu_count() or 1, len(jobs)))
-    ctx = multiprocessing.get_context("spawn")          # the parent runs JAX threads: never fork it
-    saved = {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
-                                             "JAX_PLATFORMS")}
-    os.environ.update({k: "1" for k in saved} | {"JAX_PLATFORMS": "cpu"})   # the planner's JAX bits: CPU, not the GPU
+    saved = _blas_one_thread()           # workers are spawned as jobs arrive, so for the whole call
     try:
-        with futures.ProcessPoolExecutor(workers, mp_context=ctx) as pool:
-            return list(pool.map(fn, jobs, chunksize=max(1, len(jobs) // (8 * workers)))), workers
+        pool = _kept_pool(workers) if keep else _new_pool(workers)
+        try:
+            out = list(pool.map(fn, jobs, chunksize=max(1, len(jobs) // (8 * workers))))
+        except BaseException:
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+        if keep:
+            _keep(workers, pool)
+        else:
+            pool.shutdown()
+        return out, workers
     finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
+        _restore(saved)
 
 
 def _progress(message: str) -> None:
@@ -122,11 +193,18 @@ def _progress(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
+def _reusable(job) -> bool:
+    """Can a warm worker plan this `plan_notes` job? Not the left planner before version 5, whose hand positions'
+    IK starts from the last one it solved in that process."""
+    left_hand = len(job) < 5 or job[4] == "left"
+    return not left_hand or job[3] >= 5
+
+
 def plan_all(jobs, workers: int = 0, log=None) -> list[tuple[np.ndarray, np.ndarray]]:
     """`plan_notes` of every job, in parallel processes."""
     log = log or _progress
     t0 = time.time()
-    out, used = in_processes(plan_notes, jobs, workers)
+    out, used = in_processes(plan_notes, jobs, workers, keep=all(map(_reusable, jobs)))
     log(f"planned {len(jobs)} songs ({sum(len(a) for a, _ in out):,} frames) in {time.time() - t0:.0f} s "
         f"on {used} processes")
     return out
