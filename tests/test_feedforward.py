@@ -2,6 +2,7 @@
 must play exactly as the scripted player does, and a training window must start in its planned state and read the
 plan frame by frame, or the feedforward belongs to other notes than the ones being played."""
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -131,12 +132,17 @@ def worker_pid(_) -> int:
 
 def test_a_kept_pool_plans_the_next_songs_in_the_same_workers_and_leaves_with_its_parent(tmp_path):
     """Planning reuses its worker processes between calls (a fresh worker costs seconds of imports and planner
-    set-up), except for the left planner before version 5, whose plans depend on what its worker solved before; the
-    workers of a process that leaves without shutting them down (`os._exit`, a kill) leave too."""
+    set-up), except for the left planner before version 5, whose plans depend on what its worker solved before; a
+    kept worker that died is replaced; the workers of a process that leaves without shutting them down (`os._exit`, a
+    kill) leave too."""
     first, _ = FF.in_processes(worker_pid, [None], workers=1, keep=True)
     again, _ = FF.in_processes(worker_pid, [None], workers=1, keep=True)
     fresh, _ = FF.in_processes(worker_pid, [None], workers=1)
     assert first == again and fresh != first and os.getpid() not in first + fresh
+    os.kill(first[0], signal.SIGKILL)                     # a kept worker that dies while it waits is replaced
+    time.sleep(1.5)
+    replaced, _ = FF.in_processes(worker_pid, [None], workers=1, keep=True)
+    assert replaced != first
     assert FF._reusable((None, None, None, 5)) and not FF._reusable((None, None, None, 4))
     assert FF._reusable((None, None, None, 4, "right")) and not FF._reusable((None, None, None, 4, "left", None))
     script = tmp_path / "leave.py"

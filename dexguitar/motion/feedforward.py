@@ -142,7 +142,10 @@ def _kept_pool(workers: int):
         pool, timer = _KEPT.pop(workers, (None, None))
         if timer is not None:
             timer.cancel()
-        return pool or _new_pool(workers)
+    if pool is not None and getattr(pool, "_broken", False):    # a worker died while it waited (killed, out of memory)
+        pool.shutdown(wait=False)
+        pool = None
+    return pool or _new_pool(workers)
 
 
 def _keep(workers: int, pool) -> None:
