@@ -102,7 +102,8 @@ print(json.dumps({"how": how, "traced": trainer.traced,
 def test_a_chunk_file_loads_in_a_new_process_without_tracing(tmp_path, monkeypatch):
     """The first build of a chunk keeps it in a file; a new process loads it without tracing it and computes the
     same; a file that does not load is compiled again; another config, other XLA flags or another number of
-    iterations per call is another file, another seed or run length is not; on XLA:CPU a chunk that came from JAX's persistent cache is not kept."""
+    iterations per call is another file, another seed or run length is not; on XLA:CPU a chunk that came from JAX's
+    persistent cache is not kept."""
     import subprocess
     import sys
     from dexguitar.learn import executable as X
