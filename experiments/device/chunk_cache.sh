@@ -1,8 +1,10 @@
 #!/bin/bash
 # On the device (carry .data; models/policies holding left_general and right_mixed): `dexguitar sync` for one host
-# call, four times over one cache (issue 10, "compile once", `learn/executable.py`): a first run (empty caches: the
-# chunk compiled beside the first state and kept), a later run (the chunk loaded from its file), then, with the chunk
-# files removed, a run whose chunk comes out of JAX's persistent cache and one that loads what that run kept.
+# call, several times over one cache (issue 10, "compile once", `learn/executable.py`). Without an argument: a first
+# run (empty caches: the chunk compiled beside the first state and kept), a later run (the chunk loaded from its
+# file), then, with the chunk files removed, a run whose chunk comes out of JAX's persistent cache and one that loads
+# what that run kept. With `seeds`: a first run, then runs with another seed and another number of iterations, which
+# the chunk does not read (`executable.OUTSIDE_THE_CHUNK`): each loads the first run's chunk file.
 [ -d /tmp/site/mujoco ] || { tar xJf .data/site.txz -C /tmp && rm -rf /tmp/site && mv /tmp/slim /tmp/site; }
 export PYTHONPATH=/tmp/site:$PWD PYTHONUNBUFFERED=1 DEXGUITAR_CACHE=/tmp/xla DEXGUITAR_PLANS=/tmp/plans
 nvidia-smi --query-gpu=name --format=csv,noheader | tee $OUT/gpu.txt
@@ -11,12 +13,18 @@ S=${SONG:-.data/official/spring_overture.json}
 sync1() {
   t=$SECONDS
   D sync --song $S --left models/policies/left_general --right models/policies/right_mixed \
-    --config experiments/sync_hold.py --out /tmp/runs/$1 --stop-after-calls 1 --no-eval > $OUT/$1.log 2>&1
+    --config experiments/sync_hold.py --out /tmp/runs/$1 --stop-after-calls 1 --no-eval "${@:2}" > $OUT/$1.log 2>&1
   echo "$1: rc $? $((SECONDS - t)) s; $(grep -E 'training chunk' $OUT/$1.log | cut -c1-160)" | tee -a $OUT/times.txt
 }
-sync1 first
-sync1 later
-rm -f /tmp/xla/chunks/*.exe
-sync1 resaved
-sync1 reloaded
+if [ "$1" = seeds ]; then
+  sync1 seed1 --seed 1
+  sync1 seed2 --seed 2
+  sync1 seed3_longer --seed 3 --iterations 999
+else
+  sync1 first
+  sync1 later
+  rm -f /tmp/xla/chunks/*.exe
+  sync1 resaved
+  sync1 reloaded
+fi
 ls -la /tmp/xla/chunks | tee -a $OUT/times.txt
