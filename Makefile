@@ -44,8 +44,8 @@ train-left: $(STAMP)           ## make train-left SONG="ode_to_joy twinkle" [MOT
 	$(BIN)/dexguitar train --hand left --song $(SONG) --config $(CONFIG_LEFT) \
 	  --out $(OUT)/left-$(firstword $(notdir $(SONG))) $(if $(MOTION),--motion $(MOTION)) $(if $(RESUME),--resume)
 
-train-left-general: $(STAMP)   ## the general left hand: a scaled residual on the planner, balanced procedural material [RESUME=1]
-	$(BIN)/dexguitar train --hand left --style general --procedural 256 --config experiments/left_general_scaled.py \
+train-left-general: $(STAMP)   ## the general left hand: a residual held to the planner by a prior, balanced procedural material [RESUME=1]
+	$(BIN)/dexguitar train --hand left --style general --procedural 256 --config experiments/left_general_anchored.py \
 	  --out $(OUT)/left-general $(if $(RESUME),--resume) $(if $(DEVICES),--devices $(DEVICES))
 
 train-right: $(STAMP)          ## procedural picking and strumming patterns

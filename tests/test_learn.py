@@ -170,16 +170,20 @@ def test_training_iterations_and_exact_resume(trainer, tmp_path, compiled_chunk)
     assert all(jax.tree.leaves(same)) and int(resumed.iteration) == 2
 
 
-def kl_update(trainer, iteration=0, **config):
+def kl_update(trainer, iteration=0, adv=1.0, **config):
     """(config, parameters before, after, optimizer state after, log) of one jitted PPO update of a KL-target
-    trainer (rate 1e-3) on a random batch whose log-probabilities are the acting policy's (so its first KL is 0)."""
+    trainer (rate 1e-3) on a random batch whose log-probabilities are the acting policy's (so its first KL is 0),
+    every advantage `adv`, the mean action's bias raised by `mu_bias`."""
     from types import SimpleNamespace
     from dexguitar.learn.policy import distribution
     from dexguitar.learn.trainer import Trainer
-    cfg = dataclasses.replace(trainer.config, kl_target=1e-9, actor_lr=1e-3, **config)
+    mu_bias = config.pop("mu_bias", 0.0)
+    cfg = dataclasses.replace(trainer.config, **{"kl_target": 1e-9, "actor_lr": 1e-3, **config})
     tr = Trainer(cfg, trainer.env.songs, None)
     k = jax.random.split(jax.random.PRNGKey(3), 4)
     policy, obs_norm, _ = tr.init_policy(k[0])
+    mu = policy["params"]["mu"]
+    policy = {**policy, "params": {**policy["params"], "mu": dict(mu, bias=mu["bias"] + mu_bias)}}
     lay = tr.layout
     critic = N.init_params(tr.critic, k[1], (lay.history, lay.frame_size), (lay.goal_size + lay.privileged,))
     params = {"policy": policy, "critic": critic}
@@ -191,7 +195,7 @@ def kl_update(trainer, iteration=0, **config):
     mu, log_std = distribution(tr.spec, tr.actor_params(params, obs_norm), obs)
     batch = {"obs": obs, "privileged": jnp.zeros((n, lay.privileged)), "action": action,
              "logp": N.gaussian_log_prob(mu, log_std, action),          # the acting policy's: the first KL is 0
-             "adv": jnp.ones((n, len(tr.columns))), "target": jnp.zeros((n, len(tr.columns)))}
+             "adv": jnp.full((n, len(tr.columns)), adv), "target": jnp.zeros((n, len(tr.columns)))}
     update = jax.jit(lambda p, o, b: tr.ppo_update(SimpleNamespace(params=p, opt=o, obs_norm=obs_norm,
                                                                    iteration=jnp.int32(iteration)), b,
                                                    jax.random.PRNGKey(0)))
@@ -220,6 +224,31 @@ def test_kl_target_rate_holds_through_the_actor_warm_up(trainer):
     _, params, new_params, new_opt, _ = kl_update(trainer, iteration=1, actor_warmup=1)
     assert float(new_opt["lr"]) != pytest.approx(1e-3, rel=1e-6)
     assert not jax.tree.all(jax.tree.map(np.array_equal, new_params["policy"], params["policy"]))
+
+
+def test_the_prior_pulls_the_mean_action_back_to_zero_where_the_advantages_say_nothing(trainer):
+    from dexguitar.learn import ppo
+    from dexguitar.learn.policy import distribution
+    # KL(N(mu, s) || N(0, s)) = sum mu^2 / 2 s^2: (0.3^2 + 0.4^2) / (2 x 0.1^2) = 12.5
+    assert float(ppo.prior_kl(jnp.array([[0.3, -0.4]]), jnp.log(jnp.full((1, 2), 0.1)))) == pytest.approx(12.5)
+
+    def mean_square(params):
+        obs = jax.random.normal(jax.random.PRNGKey(5), (64, trainer.layout.obs_size))
+        mu, _ = distribution(trainer.spec, {"policy": params["policy"],
+                                            "obs_norm": N.normalizer_init(trainer.layout.frame_size)}, obs)
+        return float(jnp.mean(jnp.sum(mu ** 2, -1)))
+    # zero advantages: the surrogate's gradient is 0, so without the prior the actor stands still ...
+    cfg, params, new_params, _, log = kl_update(trainer, adv=0.0, kl_target=0.0)
+    assert jax.tree.all(jax.tree.map(np.array_equal, new_params["policy"], params["policy"]))
+    assert "prior_kl" not in log
+    # ... and with it the update shrinks the mean action. Adam steps every weight by about its rate whatever the
+    # gradient, so the rate is small here: at 1e-3 the mean of 0.05 an action overshoots zero many times over.
+    cfg, params, new_params, _, log = kl_update(trainer, adv=0.0, kl_target=0.0, prior_kl=1.0, actor_lr=1e-5,
+                                                mu_bias=0.05)
+    before, after = mean_square(params), mean_square(new_params)
+    assert 0.0 < after < 0.9 * before and float(log["prior_kl"]) > 0.0
+    with pytest.raises(ValueError, match="prior_kl"):
+        dataclasses.replace(cfg, prior_kl=-1.0).check()
 
 
 def test_weights_follow_the_paper(trainer):

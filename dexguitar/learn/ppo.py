@@ -46,6 +46,13 @@ def approx_kl(log_prob, old_log_prob):
     return jnp.mean(jnp.expm1(log_ratio) - log_ratio)
 
 
+def prior_kl(mu, log_std):
+    """KL(N(mu, s) || N(0, s)) = sum mu^2 / 2 s^2, the std held: how far a residual's mean strays from its planner,
+    in its own exploration stds. Where the advantages carry no signal (a hand that already plays the note) their
+    noise walks the mean away; this pulls it back, so only corrections that pay for themselves stay."""
+    return jnp.mean(jnp.sum(0.5 * (mu / jax.lax.stop_gradient(jnp.exp(log_std))) ** 2, -1))
+
+
 # ------------------------------------------------------------------------------------------------ PopArt
 
 def popart_init(columns: int):

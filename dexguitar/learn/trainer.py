@@ -61,6 +61,7 @@ class TrainConfig:
     log_std_init: float = -2.3        # initial log std of the actions: std 0.1 of a half range (reference §7.1)
     kl_target: float = 0.0            # > 0: the actor's learning rate adapts to hold this KL per minibatch step
     action_scale: float = 1.0         # the policy's action times this (`networks.Policy.scale`; 1: the paper's)
+    prior_kl: float = 0.0             # > 0: weight of KL(pi || N(0, std)), pulling the mean to the zero action
     seed: int = 42
 
     @property
@@ -77,6 +78,8 @@ class TrainConfig:
             raise ValueError(f"TrainConfig.actor_warmup must be at least 0, got {self.actor_warmup}")
         if self.kl_target < 0:
             raise ValueError(f"TrainConfig.kl_target must be at least 0, got {self.kl_target}")
+        if self.prior_kl < 0:
+            raise ValueError(f"TrainConfig.prior_kl must be at least 0, got {self.prior_kl}")
         if not self.action_scale > 0:
             raise ValueError(f"TrainConfig.action_scale must be above 0, got {self.action_scale}")
         if self.minibatch > self.batch:
@@ -331,9 +334,13 @@ class Trainer:
             pl, clipped = ppo.policy_loss(logp, mb["logp"], mb["adv"], cfg.clip)
             v = self.value(params["critic"], obs_norm, mb["obs"], mb["privileged"])
             vl = jnp.mean(jnp.sum((v - mb["target"]) ** 2, -1)) / v.shape[-1]
-            return pl + cfg.value_coef * vl, {"policy_loss": pl, "value_loss": vl, "clip_frac": clipped,
-                                              "kl": ppo.approx_kl(logp, mb["logp"]),
-                                              "std": jnp.mean(jnp.exp(log_std))}
+            log = {"policy_loss": pl, "value_loss": vl, "clip_frac": clipped, "kl": ppo.approx_kl(logp, mb["logp"]),
+                   "std": jnp.mean(jnp.exp(log_std))}
+            loss = pl + cfg.value_coef * vl
+            if cfg.prior_kl:
+                log["prior_kl"] = ppo.prior_kl(mu, log_std)
+                loss = loss + cfg.prior_kl * log["prior_kl"]
+            return loss, log
 
         def epoch(carry, k):
             perm = jax.random.permutation(k, n)[: n_mb * cfg.minibatch].reshape(n_mb, cfg.minibatch)
