@@ -24,11 +24,9 @@ from pathlib import Path
 
 import jax
 
-from dexguitar import envs
 from dexguitar.envs.bench import bench_env, check_scenes
 from dexguitar.errors import UserError
 from dexguitar.learn.executable import in_flight
-from dexguitar.learn import distill as DI
 from dexguitar.learn import policy as PO
 from dexguitar.learn.run import (check_init, check_out, compilation_cache, load_config, recorded_config, train,
                                  xla_flags)
@@ -161,28 +159,6 @@ def _train(args) -> int:
                     stop_after_calls=args.stop_after_calls, max_minutes=args.max_minutes, init_from=args.init_from,
                     devices=args.devices)
     print(json.dumps(summary))
-    return 0
-
-
-def _distill(args) -> int:
-    """A policy cloned from the IK planner (`learn.distill`), exported to start PPO from (`train --init-from`)."""
-    _, env_cfg = load_config(args.config, hand=args.hand)
-    check_out(args.out, resume=False)
-    cfg = dataclasses.replace(DI.DistillConfig(), **{k: getattr(args, k) for k in ("windows", "rounds", "steps",
-                                                                                "batch", "workers", "seed", "noise")
-                                                    if getattr(args, k) is not None})
-    songs = _material(args, args.hand)
-    env_cfg = env_cfg or envs.EnvConfig()
-    env = envs.ENVS[args.hand](TL.stack([TL.from_song(s) for s in songs]), env_cfg)
-    print(f"distilling the planner into a {args.hand}-hand policy: {cfg.windows} windows of {len(songs)} song(s), "
-          f"{cfg.rounds} rounds of {cfg.steps} steps, on {jax.devices()[0].device_kind}; writing {args.out}",
-          file=sys.stderr)
-    params, spec, history = DI.distill(env, cfg, log=lambda m: print(m, file=sys.stderr, flush=True))
-    out = Path(args.out)
-    DI.export(out / "policy", params, spec, cfg, history, {"songs": [s.title for s in songs],
-                                                           "env": dataclasses.asdict(env_cfg)})
-    (out / "distill.json").write_text(json.dumps(history, indent=2))
-    print(json.dumps(history[-1]))
     return 0
 
 
@@ -419,22 +395,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--init-from", help="start the policy (and its normalizer) from an exported policy or run")
     p.set_defaults(func=_train)
 
-    p = sub.add_parser("distill", help="a policy cloned from the IK planner (DAgger), to start `train --init-from`")
-    p.add_argument("--hand", choices=["left", "right"], default="left")
-    p.add_argument("--song", nargs="+", help="tab files, embedded song names or folders (none: procedural)")
-    p.add_argument("--procedural", type=positive, help="procedural songs when no --song is given")
-    p.add_argument("--style", choices=["general", "exercises", "steady", "paper", "mixed"],
-                   help="procedural material, as for train")
-    p.add_argument("--config", help="the experiments/*.py of the PPO run to follow: its ENV is the env distilled in")
-    p.add_argument("--out", required=True, help="directory of policy/ and distill.json")
-    p.add_argument("--windows", type=positive, help=f"planned windows (default {DI.DistillConfig.windows})")
-    p.add_argument("--rounds", type=positive, help=f"DAgger rounds (default {DI.DistillConfig.rounds})")
-    p.add_argument("--steps", type=positive, help=f"Adam steps per round (default {DI.DistillConfig.steps})")
-    p.add_argument("--batch", type=positive, help=f"samples per Adam step (default {DI.DistillConfig.batch})")
-    p.add_argument("--noise", type=float, help="action noise in the rollouts (default 0)")
-    p.add_argument("--workers", type=positive, help="planning processes (default: one per CPU)")
-    p.add_argument("--seed", type=int)
-    p.set_defaults(func=_distill)
 
     p = sub.add_parser("sync", help="synchronize a frozen left and right policy on songs (Sec. 4); resumable")
     p.add_argument("--song", nargs="+", help="tab files or embedded song names (taken from --out on --resume)")
@@ -531,7 +491,7 @@ def main(argv=None) -> int:
     args = build_parser().parse_args(sys.argv[1:] if argv is None else list(argv))
     if getattr(args, "distributed", False):
         jax.distributed.initialize(args.coordinator, args.num_processes, args.process_id)
-    if args.command in ("train", "distill", "sync", "songs", "eval", "play"):
+    if args.command in ("train", "sync", "songs", "eval", "play"):
         os.environ["XLA_FLAGS"] = xla_flags(os.environ.get("XLA_FLAGS", ""))    # read when the backend starts
         compilation_cache()
     try:

@@ -1,4 +1,4 @@
-"""How exact the left hand's actions must be: the IK planner's own plans (`learn.distill`), rolled out with Gaussian
+"""How exact the left hand's actions must be: the IK planner's own plans (`learn.windows`), rolled out with Gaussian
 noise added to every action, on training windows of the general material (EnvConfig defaults), and with the noise on
 the wrist's 6 DoFs or on the other 21 alone. Mean per-note precision, recall and F1 over the windows' notes.
 
@@ -13,7 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from dexguitar import envs
-from dexguitar.learn import distill as D
+from dexguitar.learn import windows as D
 from dexguitar.learn import policy as PO
 from dexguitar.music import procedural
 from dexguitar.music import timeline as TL

@@ -13,7 +13,7 @@ import jax
 import jax.numpy as jnp
 
 from dexguitar import envs
-from dexguitar.learn import distill as D
+from dexguitar.learn import windows as D
 from dexguitar.learn import policy as PO
 from dexguitar.motion import feedforward as FF
 from dexguitar.music import procedural

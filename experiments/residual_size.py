@@ -10,7 +10,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from dexguitar import envs
-from dexguitar.learn import distill as D
+from dexguitar.learn import windows as D
 from dexguitar.learn import policy as PO
 from dexguitar.motion import feedforward as FF
 from dexguitar.music import procedural

@@ -13,7 +13,6 @@ import numpy as np
 
 from dexguitar.envs import EnvConfig, make
 from dexguitar.learn import policy as PO
-from dexguitar.learn.distill import with_log_std
 from dexguitar.motion import planner
 from dexguitar.music import library
 
@@ -28,7 +27,7 @@ def main(out: str, hand: str = "left", version: int = 0, log_std: float = LOG_ST
     params = PO.template(spec)                                                # every weight zero: mu = 0
     params["obs_norm"]["var"] = np.ones_like(params["obs_norm"]["var"])
     # A zero log-std head would give std 1: sampled actions, as a synchronizer trains on, would flail.
-    params = with_log_std(params, log_std)
+    params = PO.with_log_std(params, log_std)
     PO.export(out, params, dict(spec.to_meta(), iteration=0, samples=0))
     print(f"wrote {out}: a zero residual on the {hand} planner, version {version}, sampling std {np.exp(log_std):.2g}")
 

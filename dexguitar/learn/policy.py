@@ -118,6 +118,13 @@ def make_act(params: dict, spec: PolicySpec | dict, deterministic: bool = True):
     return lambda obs, key=None: fn(params, obs, key)[0]
 
 
+def with_log_std(params, log_std: float):
+    """The policy with its log-std head set to the constant `log_std` (zero kernel)."""
+    net = params["policy"]["params"]
+    head = {"kernel": jnp.zeros_like(net["log_std"]["kernel"]), "bias": jnp.full_like(net["log_std"]["bias"], log_std)}
+    return {**params, "policy": {**params["policy"], "params": {**net, "log_std": head}}}
+
+
 def unsynchronized(params: dict) -> dict:
     """A synchronizer's parameters with its output layer zeroed: the frozen pair exactly as it plays alone (the
     same program as the synchronized pair, so one compilation serves "before" and "after")."""
