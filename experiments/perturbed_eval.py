@@ -34,11 +34,15 @@ if __name__ == "__main__":
     ap.add_argument("--out", required=True)
     ap.add_argument("--procedural", type=int, default=48)
     ap.add_argument("--seed", type=int, default=2, help="of the procedural songs (training uses 0)")
+    ap.add_argument("--pick", help="comma-separated indices of the procedural songs to play (default: all)")
     ap.add_argument("--song", nargs="*", default=[])
     ap.add_argument("--rms", type=float, default=4e-5)
     ap.add_argument("--draws", type=int, default=4)
     a = ap.parse_args()
-    songs = procedural.material("left", "general", a.seed, a.procedural) + library.load_songs(a.song)
+    songs = procedural.material("left", "general", a.seed, a.procedural)
+    if a.pick:
+        songs = [songs[int(i)] for i in a.pick.split(",")]
+    songs += library.load_songs(a.song)
     out = {}
     for path in a.policies:
         params, meta = PO.load(path)
