@@ -11,7 +11,6 @@ Data flow: song batch -> training windows (the env's own sampler, augmentation i
 from __future__ import annotations
 
 import time
-import warnings
 
 import jax
 import jax.numpy as jnp
@@ -19,26 +18,11 @@ import numpy as np
 
 from dexguitar.envs.core import GuitarEnv
 from dexguitar.learn import policy as PO
-from dexguitar.motion.feedforward import in_processes
+from dexguitar.motion.feedforward import in_processes, plan_notes
+from dexguitar.motion.planner import LATEST, RIGHT_LATEST, Notes
 
 
 # ------------------------------------------------------------------------------------------------- plans
-
-_PLANNERS: dict = {}
-
-
-def _plan(job):
-    """One window's planned env actions (frames, 27), in a worker process (planners and IK caches kept there)."""
-    from dexguitar.motion.planner import Notes, ScriptedLeft, ScriptedRight, Tracker
-    role, left, pick, onset = job
-    if role not in _PLANNERS:
-        _PLANNERS[role] = (ScriptedLeft() if role == "left" else ScriptedRight(), Tracker(role))
-    hand, tracker = _PLANNERS[role]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")          # "the pick cannot reach its stroke": the window still counts
-        ctrl, _ = tracker.track(hand.desired(Notes(left, pick, onset)))
-    return tracker.to_action(ctrl).astype(np.float32)
-
 
 def window_keys(key, n: int):
     """Per window, the reset key whose window the plan is made for."""
@@ -47,19 +31,19 @@ def window_keys(key, n: int):
 
 def plan_windows(env: GuitarEnv, keys, workers: int = 0, log=print) -> list[np.ndarray]:
     """The planner's actions for the window `env.reset(k)` samples, per key k (CPU processes in parallel)."""
-    from dexguitar.motion.planner import Notes
     sample = jax.jit(jax.vmap(lambda k: env.sample_window(jax.random.split(k, 3)[0])))   # as `reset` splits it
     windows = jax.tree.map(np.asarray, sample(keys))
     role = env.roles[0]
+    version = LATEST if role == "left" else RIGHT_LATEST
     jobs = []
     for i in range(len(keys)):
         notes = Notes.from_window(jax.tree.map(lambda x: x[i], windows))
-        jobs.append((role, notes.left, notes.pick, notes.onset))
+        jobs.append((notes.left, notes.pick, notes.onset, version, role))
     t0 = time.time()
-    plans, workers = in_processes(_plan, jobs, workers)
-    log(f"planned {len(plans)} windows ({sum(len(p) for p in plans):,} frames) in {time.time() - t0:.0f} s "
+    plans, workers = in_processes(plan_notes, jobs, workers)
+    log(f"planned {len(plans)} windows ({sum(len(a) for a, _ in plans):,} frames) in {time.time() - t0:.0f} s "
         f"on {workers} processes")
-    return plans
+    return [action for action, _ in plans]
 
 
 def pad_plans(plans: list[np.ndarray], frames: int) -> tuple[np.ndarray, np.ndarray]:
