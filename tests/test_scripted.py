@@ -54,6 +54,21 @@ def test_scripted_right_hand_picks_every_note(timeline):
     assert score["f1"] >= 0.95, score["per_note"]
 
 
+def test_a_longer_song_plays_the_program_compiled_for_the_first(timeline, monkeypatch):
+    """The rollout's songs (re-batched to fixed capacities), actions (in a buffer of a power of two steps) and step
+    count are its arguments: a song with more notes and frames plays the first song's compiled program."""
+    from dexguitar.perform import scripted
+    monkeypatch.setattr(scripted, "_ROLLOUTS", {})
+    first = ScriptedPlayer(envs.make("left", [timeline], envs.EnvConfig().evaluation())).play(0)
+    song = melody()
+    longer = TL.from_song(dataclasses.replace(song, notes=song.notes + song.notes[1:6]))
+    second = ScriptedPlayer(envs.make("left", [longer], envs.EnvConfig().evaluation())).play(0)
+    assert (first["notes"], second["notes"]) == (15, 20) and second["frames"] == first["frames"] + 5 * 15
+    (program,) = scripted._ROLLOUTS.values()
+    assert program._cache_size() == 1                 # traced and compiled once, for both songs
+    assert second["closed"] == 20 and second["left"]["f1"] >= 0.95
+
+
 def test_fingering_one_finger_per_fret(timeline):
     left = ScriptedLeft()
     plan = left.fingering(Notes(np.asarray(timeline.left), np.asarray(timeline.pick), np.asarray(timeline.onset)))

@@ -22,6 +22,10 @@ from dexguitar.music import timeline as TL
 from dexguitar.world import hands as H
 
 SCORE_FIELDS = ("precision", "recall", "f1", "tp", "predicted", "targets")
+# Rollouts record into buffers of a power of two steps, at least this many, so that most songs play one program.
+MIN_STEPS = 512
+# The compiled rollouts of this process, one per env, song batch capacities and step capacity (`ScriptedPlayer.rollout`).
+_ROLLOUTS: dict = {}
 
 
 class ScriptedPlayer:
@@ -42,7 +46,6 @@ class ScriptedPlayer:
         self.tracker = Tracker("right") if "right" in self.roles else None
         self.flip = {r: H.mirror_qpos(np.ones(H.N_DOF), r) if env.config.mirror else np.ones(H.N_DOF)
                      for r in self.roles}
-        self._run = None
 
     def plan(self, window) -> np.ndarray:
         """(frames, action_size) env actions playing `window` (a `Window`, or `Notes`) from the home pose."""
@@ -72,19 +75,35 @@ class ScriptedPlayer:
 
     def rollout(self, songs, actions: np.ndarray):
         """Roll the env over songs (B,) with actions (B, T, A), vmapped; returns per-step info plus reward,
-        terminated and done (B, T, ...)."""
-        env = self.env
-        if self._run is None:
-            def one(song, acts):
-                state = env.reset(jax.random.PRNGKey(0), song=song)
+        terminated and done (B, T, ...).
 
-                def body(s, a):
-                    s = env.step(s, a)
-                    return s, dict(s.info, reward=s.reward, terminated=s.terminated, done=s.done)
-                return jax.lax.scan(body, state, acts)[1]
-            self._run = jax.jit(jax.vmap(one))
-        info = self._run(jnp.asarray(songs, jnp.int32), jnp.asarray(actions, jnp.float32))
-        return jax.tree.map(np.asarray, info)
+        The songs, re-batched to fixed capacities (`timeline.batch`), the actions, padded to a step capacity, and T
+        are the program's arguments: every song that fits the capacities plays the program compiled for the first
+        (a test or a table compiles one per env, not one per song), for T steps only."""
+        env, n, T = self.env, len(songs), actions.shape[1]
+        batch = TL.batch([jax.tree.map(lambda x: np.asarray(x)[int(i)], env.songs) for i in songs])
+        rows, steps = batch.n_notes.shape[0], TL.capacity(T, MIN_STEPS)
+        acts = np.zeros((rows, steps, actions.shape[2]), np.float32)
+        acts[:n, :T] = actions
+        key = (type(env).__name__, type(env.base).__name__, env.config, str(env.base.mjx_model.impl),
+               str(jax.tree.map(lambda x: (x.shape, str(x.dtype)), batch)), steps)
+        if key not in _ROLLOUTS:
+            def one(songs_, song, acts_, length):
+                bound = env.bind(songs_)
+                state = bound.reset(jax.random.PRNGKey(0), song=song)
+
+                def record(s):
+                    return dict(s.info, reward=s.reward, terminated=s.terminated, done=s.done)
+                out = jax.tree.map(lambda x: jnp.zeros((steps,) + x.shape, x.dtype), record(state))
+
+                def body(carry):
+                    t, s, out = carry
+                    s = bound.step(s, acts_[t])
+                    return t + 1, s, jax.tree.map(lambda o, v: o.at[t].set(v), out, record(s))
+                return jax.lax.while_loop(lambda c: c[0] < length, body, (jnp.int32(0), state, out))[2]
+            _ROLLOUTS[key] = jax.jit(jax.vmap(one, in_axes=(None, 0, 0, None)))
+        info = _ROLLOUTS[key](batch, jnp.arange(rows, dtype=jnp.int32), jnp.asarray(acts), jnp.int32(T))
+        return jax.tree.map(lambda x: np.asarray(x)[:n, :T], info)
 
     def play(self, songs=0) -> list[dict] | dict:
         """Plan and play song index(es) of the env's batch. Per song: {"frames", "notes", "plan_s", "roll_s",
