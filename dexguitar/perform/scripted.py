@@ -22,8 +22,10 @@ from dexguitar.music import timeline as TL
 from dexguitar.world import hands as H
 
 SCORE_FIELDS = ("precision", "recall", "f1", "tp", "predicted", "targets")
-# Rollouts record into buffers of a power of two steps, at least this many, so that most songs play one program.
-MIN_STEPS = 512
+# A rollout's songs are padded to a power of two notes and its actions to a power of two steps, at least these many,
+# so that most songs play one program (fewer notes than training's `timeline.MIN_NOTES`: a step reads its whole
+# window, and a short song's would be mostly padding).
+MIN_NOTES, MIN_STEPS = 64, 512
 # The compiled rollouts of this process, one per env, song batch capacities and step capacity (`ScriptedPlayer.rollout`).
 _ROLLOUTS: dict = {}
 
@@ -77,14 +79,15 @@ class ScriptedPlayer:
         """Roll the env over songs (B,) with actions (B, T, A), vmapped; returns per-step info plus reward,
         terminated and done (B, T, ...).
 
-        The songs, re-batched to fixed capacities (`timeline.batch`), the actions, padded to a step capacity, and T
-        are the program's arguments: every song that fits the capacities plays the program compiled for the first
-        (a test or a table compiles one per env, not one per song), for T steps only."""
+        The songs, re-batched to a fixed note capacity (`timeline.batch`), the actions, padded to a step capacity,
+        and T are the program's arguments: every batch of as many songs that fits the capacities plays the program
+        compiled for the first (a test or a table compiles one per env, not one per song), for T steps only."""
         env, n, T = self.env, len(songs), actions.shape[1]
-        batch = TL.batch([jax.tree.map(lambda x: np.asarray(x)[int(i)], env.songs) for i in songs])
-        rows, steps = batch.n_notes.shape[0], TL.capacity(T, MIN_STEPS)
-        acts = np.zeros((rows, steps, actions.shape[2]), np.float32)
-        acts[:n, :T] = actions
+        picked = [jax.tree.map(lambda x: np.asarray(x)[int(i)], env.songs) for i in songs]
+        batch = TL.batch(picked, songs=n, notes=TL.capacity(picked[0].note_capacity, MIN_NOTES))   # no empty rows
+        steps = TL.capacity(T, MIN_STEPS)
+        acts = np.zeros((n, steps, actions.shape[2]), np.float32)
+        acts[:, :T] = actions
         key = (type(env).__name__, type(env.base).__name__, env.config, str(env.base.mjx_model.impl),
                str(jax.tree.map(lambda x: (x.shape, str(x.dtype)), batch)), steps)
         if key not in _ROLLOUTS:
@@ -102,8 +105,8 @@ class ScriptedPlayer:
                     return t + 1, s, jax.tree.map(lambda o, v: o.at[t].set(v), out, record(s))
                 return jax.lax.while_loop(lambda c: c[0] < length, body, (jnp.int32(0), state, out))[2]
             _ROLLOUTS[key] = jax.jit(jax.vmap(one, in_axes=(None, 0, 0, None)))
-        info = _ROLLOUTS[key](batch, jnp.arange(rows, dtype=jnp.int32), jnp.asarray(acts), jnp.int32(T))
-        return jax.tree.map(lambda x: np.asarray(x)[:n, :T], info)
+        info = _ROLLOUTS[key](batch, jnp.arange(n, dtype=jnp.int32), jnp.asarray(acts), jnp.int32(T))
+        return jax.tree.map(lambda x: np.asarray(x)[:, :T], info)
 
     def play(self, songs=0) -> list[dict] | dict:
         """Plan and play song index(es) of the env's batch. Per song: {"frames", "notes", "plan_s", "roll_s",
