@@ -22,10 +22,9 @@ from dexguitar.music import timeline as TL
 from dexguitar.world import hands as H
 
 SCORE_FIELDS = ("precision", "recall", "f1", "tp", "predicted", "targets")
-# A rollout's songs are padded to a power of two notes and its actions to a power of two steps, at least these many,
-# so that most songs play one program (fewer notes than training's `timeline.MIN_NOTES`: a step reads its whole
-# window, and a short song's would be mostly padding).
-MIN_NOTES, MIN_STEPS = 64, 512
+# A rollout's actions are padded to a power of two steps, at least this many, and its songs to a power of two notes
+# (`timeline.batch`), so that most songs play one program.
+MIN_STEPS = 512
 # The compiled rollouts of this process, one per env, song batch capacities and step capacity (`ScriptedPlayer.rollout`).
 _ROLLOUTS: dict = {}
 
@@ -84,7 +83,7 @@ class ScriptedPlayer:
         compiled for the first (a test or a table compiles one per env, not one per song), for T steps only."""
         env, n, T = self.env, len(songs), actions.shape[1]
         picked = [jax.tree.map(lambda x: np.asarray(x)[int(i)], env.songs) for i in songs]
-        batch = TL.batch(picked, songs=n, notes=TL.capacity(picked[0].note_capacity, MIN_NOTES))   # no empty rows
+        batch = TL.batch(picked, songs=n)                          # no empty rows: each costs as much as a song
         steps = TL.capacity(T, MIN_STEPS)
         acts = np.zeros((n, steps, actions.shape[2]), np.float32)
         acts[:, :T] = actions
