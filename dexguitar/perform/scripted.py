@@ -25,7 +25,7 @@ SCORE_FIELDS = ("precision", "recall", "f1", "tp", "predicted", "targets")
 # A rollout's actions are padded to a power of two steps, at least this many, and its songs to a power of two notes
 # (`timeline.batch`), so that most songs play one program.
 MIN_STEPS = 512
-# The compiled rollouts of this process, one per env, song batch capacities and step capacity (`ScriptedPlayer.rollout`).
+# The compiled rollouts of this process, one per env, song capacities and step capacity (`ScriptedPlayer.rollout`).
 _ROLLOUTS: dict = {}
 
 
