@@ -35,9 +35,8 @@ def equations(jaxpr) -> int:
     """The primitive equations of `jaxpr`, those of every sub-jaxpr (loop bodies, branches, inner jits) included."""
     n = 0
     for eqn in jaxpr.eqns:
-        subs = [v for p in eqn.params.values() for v in (p if isinstance(p, (list, tuple)) else [p])
-                if isinstance(v, (jcore.ClosedJaxpr, jcore.Jaxpr))]
-        n += sum(equations(getattr(s, "jaxpr", s)) for s in subs) if subs else 1
+        subs = list(jcore.jaxprs_in_params(eqn.params))
+        n += sum(map(equations, subs)) if subs else 1
     return n
 
 
