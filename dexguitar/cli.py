@@ -142,8 +142,8 @@ def _material(args, hand: str):
 
 
 def _train(args) -> int:
-    cfg, env_cfg = load_config(args.config, hand=args.hand, num_envs=args.envs, seed=args.seed,
-                               iterations=args.iterations)
+    cfg, env_cfg = load_config(args.config, hand=args.hand, num_envs=args.envs, minibatch=args.minibatch,
+                               seed=args.seed, iterations=args.iterations)
     check_out(args.out, args.resume)
     songs = _material(args, cfg.hand)
     motion = load_motion(args.motion or cfg.hand)
@@ -184,7 +184,8 @@ def _sync(args) -> int:
     if not song_files:
         raise UserError(f"sync: give --song (tab files or embedded song names)"
                         + (f"; {out / 'config.json'} records none" if recorded else ""))
-    overrides = dict(hand="duet", num_envs=args.envs, seed=args.seed, iterations=args.iterations)
+    overrides = dict(hand="duet", num_envs=args.envs, minibatch=args.minibatch, seed=args.seed,
+                     iterations=args.iterations)
     if recorded and not args.config:
         cfg, env_cfg = recorded_config(recorded, **overrides)
     else:
@@ -337,6 +338,8 @@ def _add_run_args(p: argparse.ArgumentParser, out_help: str) -> None:
     p.add_argument("--out", required=True, help=out_help)
     p.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
     p.add_argument("--envs", type=positive, help="override CONFIG.num_envs")
+    p.add_argument("--minibatch", type=positive, help="override CONFIG.minibatch (samples per gradient step, all "
+                                                      "devices together: scale it with --envs to keep the steps)")
     p.add_argument("--iterations", type=positive, help="override CONFIG.iterations (total, counting resumed ones)")
     p.add_argument("--seed", type=int)
     p.add_argument("--max-minutes", type=positive_float, help="stop (with a checkpoint) after this much wall time")

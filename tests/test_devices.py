@@ -12,6 +12,8 @@ CACHE = Path(os.environ.get("DEXGUITAR_TEST_CACHE", ROOT / ".cache" / "xla"))   
 
 
 def test_four_devices_match_one_and_a_four_device_run_resumes_on_one(tmp_path):
+    """Also: a program kept for fewer devices than the machine has loads onto those devices (a 2-GPU run on a
+    4-GPU machine aborted in XLA when it loaded its chunk onto all 4)."""
     flags = (os.environ.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=4").strip()  # + conftest's
     env = dict(os.environ, XLA_FLAGS=flags, JAX_PLATFORMS="cpu")
     done = subprocess.run([sys.executable, str(ROOT / "tests" / "devices_check.py"), str(CACHE), str(tmp_path / "run")],
@@ -21,6 +23,10 @@ def test_four_devices_match_one_and_a_four_device_run_resumes_on_one(tmp_path):
     assert out["devices"] == 4
     assert out["split"] == ["4 devices: 1 envs and minibatches of 2 samples each"]
     assert out["chunks"][2] == "reused"              # the resumed run plays the 1-device run's program
+    assert out["chunks"][3] == "loaded" and out["later"] == 1    # ... and so does a later run, loaded from its file
     assert out["moved"] > 1e-4                       # the update did change the parameters ...
     assert out["max_diff"] < 1e-5                    # ... and identically on 1 and 4 devices (atol 1e-5)
+    # a minibatch of 8 samples: one device multiplies all 8 rows through the networks, each of 4 devices 2 of them
+    # (before the update's minibatches were split, every device computed all 8)
+    assert 8 in out["dot_rows"]["1"] and 8 not in out["dot_rows"]["4"] and 2 in out["dot_rows"]["4"]
     assert out["iterations"] == [1, 2] and out["second"] == 2

@@ -25,8 +25,7 @@ class Placement:
 
     def shardings(self, state):
         """The sharding of every leaf of a `TrainState`."""
-        split = NamedSharding(self.mesh, PartitionSpec("envs"))
-        return jax.tree.map(lambda _: self.whole, state).replace(env=jax.tree.map(lambda _: split, state.env))
+        return jax.tree.map(lambda _: self.whole, state).replace(env=jax.tree.map(lambda _: self.split, state.env))
 
     def placed_shapes(self, shapes):
         """A `TrainState`'s shapes (`jax.eval_shape`) with this placement's shardings: what a program is lowered
@@ -43,6 +42,11 @@ class Placement:
             host = np.asarray(x)
             return jax.make_array_from_callback(host.shape, sharding, lambda index: host[index])
         return jax.tree.map(one, tree, shardings)
+
+    @property
+    def split(self) -> NamedSharding:
+        """Split along the first axis (envs, or the samples of a minibatch) over the devices of the mesh."""
+        return NamedSharding(self.mesh, PartitionSpec("envs"))
 
     @property
     def whole(self) -> NamedSharding:

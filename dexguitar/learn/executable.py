@@ -125,6 +125,7 @@ class ChunkBuild:
         self.start = time.perf_counter()
         self.log = log
         self._lower = lambda: trainer.make_train_chunk(n, where).lower(state, data)
+        self._devices = list(where.mesh.devices.flat)
         self.key = key(trainer, where, n, (state, data))
         folder = directory() if jax.process_count() == 1 else None
         self.path = folder / f"chunk-{self.key}.exe" if folder else None
@@ -143,7 +144,9 @@ class ChunkBuild:
         try:
             t = time.perf_counter()
             with open(self.path, "rb") as f:
-                compiled = serialize_executable.deserialize_and_load(*pickle.load(f))
+                # onto the run's devices: by default JAX loads onto all of them, and XLA aborts the process where the
+                # program was compiled for fewer (a 2-GPU run on a 4-GPU machine)
+                compiled = serialize_executable.deserialize_and_load(*pickle.load(f), execution_devices=self._devices)
             os.utime(self.path)                     # recently used: kept by `_prune`
             jax.monitoring.record_event_duration_secs(LOAD_EVENT, time.perf_counter() - t)
             return compiled
