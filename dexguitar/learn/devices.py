@@ -11,9 +11,9 @@ from dexguitar.errors import UserError
 class Placement:
     """Where a run's arrays live: a mesh over `devices` devices (default: every device, on every host when started
     with `jax.distributed`). Env states are split along the envs; everything else (parameters, optimizer states,
-    normalizers, replay buffers, the songs) is replicated, so XLA computes each device's envs where they live and
-    reduces gradients and statistics across devices: one iteration on N devices is the one-device iteration, up to
-    the order of float sums."""
+    normalizers, replay buffers, the songs) is replicated, so XLA computes each device's envs where they live, splits
+    each PPO minibatch over the devices (`split`) and reduces gradients and statistics across them: one iteration on
+    N devices is the one-device iteration, up to the order of float sums."""
 
     def __init__(self, devices: int | None = None):
         found = jax.devices()

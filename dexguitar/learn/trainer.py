@@ -324,7 +324,8 @@ class Trainer:
     def ppo_update(self, ts: TrainState, batch, key, split=None):
         """PPO epochs over `batch`. `split`: the sharding that spreads a minibatch's samples over the devices. A
         minibatch gathered by a random permutation is otherwise whole on every device, and each device computed the
-        whole minibatch's gradient: on 4 H100s the update took 4 times as long (results/multi_gpu/)."""
+        whole minibatch's gradient: on 4 H100s an iteration grew as if each did the update of all 4
+        (experiments/benchmarks.md, "Training on several GPUs")."""
         cfg = self.config
         n = batch["obs"].shape[0]
         n_mb = max(n // cfg.minibatch, 1)
