@@ -117,6 +117,10 @@ def test_a_run_resumes_on_another_machine_from_its_compact_state(trainer, tmp_pa
     key, iteration and the optimizers' scalars as saved; envs, replay buffers and Adam's moments fresh."""
     run = tmp_path / "run"
     RUN.train(trainer, run, iterations=2, progress=False, log=lambda m: None)
+    rows = [json.loads(r) for r in (run / "metrics.jsonl").read_text().splitlines()]
+    # each row times its two saves; the wall clock between two rows holds the first one's saves and the second's chunk
+    assert all(r["ckpt_s"] > 0 and r["compact_s"] > 0 for r in rows)
+    assert rows[1]["wall"] - rows[0]["wall"] >= rows[0]["ckpt_s"] + rows[0]["compact_s"] + rows[1]["seconds"]
     fresh = trainer.init()
     full, _ = C.restore(run / "ckpt", fresh)
     shutil.rmtree(run / "ckpt")                                        # it stays on the first machine

@@ -326,10 +326,15 @@ def _loop(trainer, run, where, state, data, build, iterations, progress, stop_af
         if summary.get("nonfinite/env_steps", 0) > 0:
             log(f"warning: {summary['nonfinite/env_steps']:.0f} env steps went non-finite and were reset")
         it = int(state.iteration)
+        t1 = time.perf_counter()
         summary.update(iteration=it, samples=it * cfg.batch, seconds=dt, samples_per_s=n * cfg.batch / dt,
-                       wall=time.perf_counter() - t_start, compile_s=compile_s)
+                       wall=t1 - t_start, compile_s=compile_s)
         C.save(run.ckpt, it, state)
+        t2 = time.perf_counter()
         C.save(run.compact, it, state, keep=1, only=compact)
+        # the saves' seconds, outside `seconds` and before the next row's `wall` (on 4 H100s the wall time per chunk
+        # exceeded the chunk's own by 3.8 s: experiments/benchmarks.md, "Training on several GPUs")
+        summary.update(ckpt_s=t2 - t1, compact_s=time.perf_counter() - t2)
         if where.main:
             with open(run.metrics, "a") as f:
                 f.write(json.dumps(summary) + "\n")
