@@ -8,7 +8,8 @@
 #                                   N = 4) for MIN minutes, resuming /tmp/runs/long on a warm machine, or the compact
 #                                   state carried in .data/long.tgz on a fresh one
 # Logs and metrics into $OUT; `long` also the run without its full checkpoint (config.json, metrics.jsonl, resume/ in
-# parts long.tgz.aa, .ab: `cat long.tgz.* > .data/long.tgz` for the next machine) and the exported policy (policy.tgz). A fresh machine plans the 256 songs first (cached in /tmp/plans).
+# parts long.tgz.aa, .ab: `cat long.tgz.* > .data/long.tgz` for the next machine) and the exported policy
+# (policy.tgz). A fresh machine plans the songs first (cached in /tmp/plans).
 # A dry run on a CPU: ENVS (per device), CONFIG and PY (the interpreter) replace 4096, the recipe and python3.
 set -e
 [ -d /tmp/site ] || { tar xJf .data/site.txz -C /tmp && mv /tmp/slim /tmp/site; }
