@@ -15,7 +15,8 @@ per weight in a direction set by noise: a random walk of the mean, away from a p
 Measured (results/general_left/session30/, one H100, 9.8 minutes of training, 6.9e7 samples): stable, the mean residual
 4e-5 of a half range (rms) where the planner goes. Against the planner with constant offsets of that size (the exact
 plan is a lucky draw: 0.809 exact, 0.764 with offsets, on 48 held-out songs) it is level on the official songs (0.988
-against 0.986) and 0.016 below on the held-out ones (0.748 against 0.764). Not better than the planner.
+against 0.986) and 0.016 below on the held-out ones (0.748 against 0.764); on 48 of its own training songs 0.014 below
+(0.742 against 0.756, results/general_left/session33/). Not better than the planner, even where it trained.
 
     dexguitar train --hand left --style general --procedural 256 --config experiments/left_general_anchored.py \\
         --out runs/left-general-anchored --max-minutes 7

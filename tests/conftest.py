@@ -58,14 +58,14 @@ def compiles_per_call(compiles, monkeypatch):
     monkeypatch.setattr(X, "_LIVE", {})        # not a chunk that an earlier test of this process compiled
 
     def run(trainer, out, calls: int = 2) -> list[int]:
-        counts, save = [], C.save
+        counts, save = [], C.Saver.save
 
-        def counting_save(directory, *args, **kwargs):
-            out = save(directory, *args, **kwargs)
-            if Path(directory).parent.name == "policy":  # the export: the last thing a host call does
+        def counting_save(saver, *args, **kwargs):
+            out = save(saver, *args, **kwargs)
+            if saver.directory.parent.name == "policy":  # the export: the last thing a host call does
                 counts.append(compiles())
             return out
-        monkeypatch.setattr(C, "save", counting_save)
+        monkeypatch.setattr(C.Saver, "save", counting_save)
         start = compiles()
         RUN.train(trainer, out, iterations=calls, progress=False, log=lambda m: None)
         return [b - a for a, b in zip([start] + counts[:-1], counts)]

@@ -1,7 +1,8 @@
-"""Faults survived and bad input refused (issue #14): non-finite numbers in training, a damaged checkpoint, a run
-directory in use or made with another setup, a kill between a checkpoint and its metrics row, and every command given
-bad paths: one line and exit code 2, never a traceback. The training runs share the tiny left-hand trainer of
-tests/test_learn.py (same program, so the persistent compilation cache serves it)."""
+"""Faults survived and bad input refused (issue #14): non-finite numbers in training, a damaged checkpoint, a save
+written in the background while training goes on or killed half-written, a run directory in use or made with another
+setup, a kill between a checkpoint and its metrics row, and every command given bad paths: one line and exit code 2,
+never a traceback. The training runs share the tiny left-hand trainer of tests/test_learn.py (same program, so the
+persistent compilation cache serves it)."""
 import json
 import shutil
 
@@ -88,6 +89,48 @@ def test_a_damaged_latest_checkpoint_falls_back_to_the_previous_one(tmp_path, ca
     shutil.rmtree(tmp_path / "1")
     with pytest.raises(RunError, match="no intact checkpoint"):
         C.restore(tmp_path, tree)
+
+
+def test_a_background_save_holds_what_was_saved_while_a_donating_step_reuses_the_buffers(tmp_path):
+    """The run's saves are written while the next chunk runs, and that chunk donates the state it was given: each
+    step restores the values it was saved with, and an interruption (here Ctrl-C) still finishes the save in
+    flight."""
+    step = jax.jit(lambda t: jax.tree.map(lambda x: 2 * x + 1, t), donate_argnums=0)
+    tree = {"a": jnp.arange(2**20, dtype=jnp.float32), "b": jnp.ones((3, 2))}
+    with pytest.raises(KeyboardInterrupt):
+        with C.Saver(tmp_path / "ck", keep=3) as saver:
+            for i in (1, 2, 3):
+                saver.save(i, tree)
+                tree = step(tree)
+            raise KeyboardInterrupt
+    assert C.steps(tmp_path / "ck") == [3, 2, 1]
+    template = {"a": jnp.zeros(2**20), "b": jnp.zeros((3, 2))}
+    for i in (1, 2, 3):            # x after k steps of 2x + 1 is 2^k (x + 1) - 1
+        restored, _ = C.restore(tmp_path / "ck", template, step=i)
+        np.testing.assert_array_equal(restored["a"][:3], 2.0 ** (i - 1) * (np.arange(3) + 1) - 1)
+        assert float(restored["a"][-1]) == 2.0 ** (i - 1) * 2**20 - 1
+        np.testing.assert_array_equal(restored["b"], np.full((3, 2), 2.0 ** i - 1))
+
+
+def test_a_process_killed_while_its_save_is_written_leaves_the_step_before_it(tmp_path):
+    """SIGKILL while a background save is still being written (256 MiB): the step before is the newest and intact,
+    and the half-written step is written again by the resumed run."""
+    import subprocess
+    import sys
+    script = (
+        "import os, signal, sys; import jax.numpy as jnp; from dexguitar.learn import checkpoint as C\n"
+        "x = jnp.arange(2**26, dtype=jnp.float32)\n"
+        "with C.Saver(sys.argv[1], keep=1) as saver:\n"
+        "    saver.save(1, {'a': x}); saver.wait(); saver.save(2, {'a': x + 1}); os.kill(os.getpid(), signal.SIGKILL)\n")
+    proc = subprocess.run([sys.executable, "-c", script, str(tmp_path / "ck")], capture_output=True)
+    assert proc.returncode == -9
+    assert C.steps(tmp_path / "ck") == [1]
+    template = {"a": jnp.zeros(2**26)}
+    restored, step = C.restore(tmp_path / "ck", template)
+    assert step == 1 and float(restored["a"][12345]) == 12345.0 and float(restored["a"][-1]) == np.float32(2**26 - 1)
+    C.save(tmp_path / "ck", 2, {"a": jnp.full(2**26, 5.0)}, keep=1)
+    restored, step = C.restore(tmp_path / "ck", template)
+    assert C.steps(tmp_path / "ck") == [2] and float(restored["a"][7]) == 5.0
 
 
 def test_a_run_initialized_from_an_export_starts_from_its_weights(trainer, tmp_path, monkeypatch):

@@ -1,6 +1,10 @@
 """Saving and restoring pytrees with orbax: the whole `TrainState` of a run (for --resume), a compact part of it
 (`only`: what cannot be rebuilt, small enough to carry between machines) and policy exports.
 
+A training run saves through a `Saver`, in the background: the save returns once the arrays are copied to host
+memory and the disk write overlaps the next training chunk. Orbax writes each step into a temporary folder and
+renames it when complete, so a process killed mid-write leaves the step before it as the newest.
+
 A checkpoint directory holds numbered steps; the newest few are kept. Restoring falls back to the newest intact step
 when a later one is damaged (a file truncated or deleted by hand, a disk that filled up), with a warning, so one bad
 save never loses a run.
@@ -29,12 +33,37 @@ def _leaves(tree, only=None) -> dict:
             if np.size(leaf) > 0 and (only is None or only(path, leaf))}
 
 
+class Saver:
+    """The saves of one checkpoint directory, written in the background. `save` returns when the arrays are on the
+    host (a donating jit may then reuse their device buffers) and first waits for the save before it; `wait` (or
+    leaving the `with` block) returns when everything saved is complete on disk."""
+
+    def __init__(self, directory, keep: int = 2, only=None):
+        self.directory, self.only = Path(directory), only
+        self._mngr = _manager(directory, keep)
+
+    def save(self, step: int, tree) -> None:
+        self._mngr.save(int(step), args=ocp.args.StandardSave(_leaves(tree, self.only)), force=True)
+
+    def wait(self) -> None:
+        self._mngr.wait_until_finished()
+
+    def close(self) -> None:
+        self.wait()
+        self._mngr.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
 def save(directory, step: int, tree, keep: int = 2, only=None) -> None:
     """Save a pytree (or the leaves `only` keeps) at `step` (blocking: when this returns the checkpoint is complete
     on disk)."""
-    with _manager(directory, keep) as mngr:
-        mngr.save(int(step), args=ocp.args.StandardSave(_leaves(tree, only)), force=True)
-        mngr.wait_until_finished()
+    with Saver(directory, keep, only) as saver:
+        saver.save(step, tree)
 
 
 def steps(directory) -> list[int]:

@@ -181,12 +181,16 @@ def _stored(params: dict) -> dict:
             for k, v in params.items()}
 
 
-def export(directory, params: dict, meta: dict) -> None:
-    """Write `params` ({"policy", "obs_norm"}, without the frozen policies) and `policy.json`."""
+def export(directory, params: dict, meta: dict, saver: C.Saver | None = None) -> None:
+    """Write `params` ({"policy", "obs_norm"}, without the frozen policies) and `policy.json`; the weights in the
+    background through `saver` (a training run's, for `directory / "params"`) if one is given."""
     directory = Path(directory).absolute()
     directory.mkdir(parents=True, exist_ok=True)
     own = {"policy": params["policy"], "obs_norm": params["obs_norm"]}
-    C.save(directory / "params", int(meta.get("iteration", 0)), _stored(own), keep=1)
+    if saver is None:
+        C.save(directory / "params", int(meta.get("iteration", 0)), _stored(own), keep=1)
+    else:
+        saver.save(int(meta.get("iteration", 0)), _stored(own))
     tmp = directory / "policy.json.tmp"
     tmp.write_text(json.dumps(meta, indent=2))
     os.replace(tmp, directory / "policy.json")
