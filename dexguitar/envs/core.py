@@ -146,7 +146,10 @@ class GuitarEnv:
         self.songs = songs
         self.guitar = Guitar(mirror=config.mirror)
         self.model = S.build_model(self.scene, mirror=config.mirror)
-        self.mjx_model = mjx.put_model(self.model, impl=backend)
+        # this process's own device: MJX's default is jax.devices()[0], which in a run of several processes
+        # (`--distributed`) is the first process's, out of reach of the others
+        device = jax.local_devices()[0]
+        self.mjx_model = mjx.put_model(self.model, impl=backend, device=device)
         self.hands = tuple(S.hand_index(self.model, r) for r in self.roles)
         pos, rot = S.guitar_pose(self.model)
         self._g_pos, self._g_rot = jnp.asarray(pos, jnp.float32), jnp.asarray(rot, jnp.float32)
@@ -158,7 +161,7 @@ class GuitarEnv:
         d = mujoco.MjData(self.model)
         mujoco.mj_resetDataKeyframe(self.model, d, 0)
         mujoco.mj_kinematics(self.model, d)
-        self._data0 = mjx.put_data(self.model, d, impl=backend)
+        self._data0 = mjx.put_data(self.model, d, impl=backend, device=device)
         self._jnt_lo = jnp.asarray(self.model.jnt_range[:, 0], jnp.float32)
         self._jnt_hi = jnp.asarray(self.model.jnt_range[:, 1], jnp.float32)
         self._contact_pairs = self._pick_contacts()
