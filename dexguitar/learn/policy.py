@@ -186,11 +186,12 @@ def export(directory, params: dict, meta: dict, saver: C.Saver | None = None) ->
     background through `saver` (a training run's, for `directory / "params"`) if one is given."""
     directory = Path(directory).absolute()
     directory.mkdir(parents=True, exist_ok=True)
-    own = {"policy": params["policy"], "obs_norm": params["obs_norm"]}
+    own = _stored({"policy": params["policy"], "obs_norm": params["obs_norm"]})
+    step = int(meta.get("iteration", 0))
     if saver is None:
-        C.save(directory / "params", int(meta.get("iteration", 0)), _stored(own), keep=1)
+        C.save(directory / "params", step, own, keep=1)
     else:
-        saver.save(int(meta.get("iteration", 0)), _stored(own))
+        saver.save(step, own)
     tmp = directory / "policy.json.tmp"
     tmp.write_text(json.dumps(meta, indent=2))
     os.replace(tmp, directory / "policy.json")
