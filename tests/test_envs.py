@@ -7,6 +7,8 @@ import numpy as np
 import pytest
 
 from dexguitar import envs
+from dexguitar.envs import rewards as R
+from dexguitar.music import cursor as CU
 from dexguitar.music import timeline as TL
 from dexguitar.music.song import Song, make_note
 
@@ -70,6 +72,19 @@ def test_non_finite_physics_terminates_and_resets_only_that_env(left):
     np.testing.assert_array_equal(np.asarray(state.reward)[1], [-25.0] * 6)     # the terminal reward, not NaN
     assert np.asarray(state.lifetime).tolist() == [2, 0, 2, 2]                  # env 1 starts over
     assert np.isfinite(np.asarray(state.obs)).all() and np.isfinite(np.asarray(state.body.data.qpos)).all()
+
+
+def test_margin_reward_adds_each_strings_press_margin(left):
+    env, reset, step = left
+    paid = envs.make("left", [scale_song(), chord_song()], episode_frames=12, margin_reward=0.5)
+    state = reset(jax.random.split(jax.random.PRNGKey(0), N_ENVS))
+    action = 0.05 * jax.random.normal(jax.random.PRNGKey(1), (N_ENVS, env.action_size))
+    plain, more = step(state, action), jax.jit(jax.vmap(paid.step))(state, action)
+    seg = jax.vmap(lambda d: env.segments(d, env.hands[0]))(plain.body.data)
+    goal = jax.vmap(lambda c: CU.current(c)[0])(state.cursor)
+    extra = 0.5 * jax.vmap(R.margin_reward)(seg, goal)
+    assert np.abs(np.asarray(extra)).max() > 0.1
+    np.testing.assert_allclose(np.asarray(more.reward), np.asarray(plain.reward + extra), atol=1e-5)
 
 
 def test_training_window_is_a_rest_then_song_notes(left):

@@ -81,6 +81,38 @@ def _x_at(string, y):
     return float(GUITAR.string_x(string, y))
 
 
+# One fingertip lying along x, 3 mm above string 3, in the middle of fret space 5 (the geometry of
+# tests/test_detect.py): x = 0.003973, y = 0.074473 between wires 5 (0.060633) and 4 (0.088313); string 2 is
+# 7.266 mm from its axis and string 4 7.566 mm.
+FRET5_TIP = np.asarray([[[0.003973 - 0.001, 0.074473, 0.0153], [0.003973 + 0.001, 0.074473, 0.0153]]], np.float32)
+
+
+def margins(goal, seg=FRET5_TIP):
+    return np.asarray(R.press_margins(jnp.asarray(seg), jnp.asarray(goal, jnp.int32)))
+
+
+def test_press_margin_is_the_room_left_to_the_press_distance_and_the_fret_wires():
+    # String 3 at fret 5: min(6 - 3 mm, 13.84 mm to either wire) = 3 mm. Strings 2 and 4 open: 7.266 - 6 and
+    # 7.566 - 6 mm of clearance. Muted strings: anything goes.
+    m = margins([0, -1, 5, -1, 0, 0])
+    np.testing.assert_allclose(m[1:4], [0.001266, 0.003, 0.001566], atol=2e-5)
+    assert np.isinf(m[[0, 4, 5]]).all()
+    # Fret 4 asked: the tip lies 13.84 mm beyond wire 4, over a higher fret (and presses it: 3 mm into the press
+    # distance); fret 6 asked: 13.84 mm short of wire 5.
+    np.testing.assert_allclose(margins([0, 0, 4, 0, 0, 0])[2], -0.01384, atol=2e-5)
+    np.testing.assert_allclose(margins([0, 0, 6, 0, 0, 0])[2], -0.01384, atol=2e-5)
+    # 8 mm above the string it presses nothing: 2 mm short of the press distance.
+    high = FRET5_TIP.copy()
+    high[..., 2] = 0.0123 + 0.008
+    np.testing.assert_allclose(margins([0, 0, 5, 0, 0, 0], high)[2], -0.002, atol=2e-5)
+
+
+def test_margin_reward_is_the_margin_over_3_mm_clipped():
+    r = np.asarray(R.margin_reward(jnp.asarray(FRET5_TIP), jnp.asarray([0, -1, 5, -1, 0, 4], jnp.int32)))
+    # 1.266 / 3, 3 / 3, 1.566 / 3; muted string 1: 1; string 6 asked at fret 4 with no finger near it: -1.
+    np.testing.assert_allclose(r, [1.0, 0.422, 1.0, 0.522, 1.0, -1.0], atol=1e-2)
+
+
 def test_downward_sweep_over_the_target_strings_succeeds():
     y, z = -0.33, GUITAR.string_z - 0.003
     p0 = jnp.array([_x_at(6, y) - 0.005, y, z])

@@ -69,6 +69,8 @@ class EnvConfig:
     feedforward: int = 0                 # the left action is a residual on the planner's (`motion.feedforward`)
                                          # of this version (`motion.planner.LATEST`; True = 1); 0: none
     right_feedforward: int = 0           # the right action likewise, on the right planner's (`planner.RIGHT_LATEST`)
+    margin_reward: float = 0.0           # not in the paper: added to each string's column times its press margin
+                                         # (`rewards.margin_reward`), a smooth measure of how robustly it plays
 
     def evaluation(self) -> "EnvConfig":
         return dataclasses.replace(self, sequential=True, shift_prob=0.0, tempo_prob=0.0, pick_depth=0.0,
@@ -392,6 +394,8 @@ class GuitarEnv:
         press = detect.pressed_frets(seg, self.guitar)
         tips, energy = self.hand_energy(state, data, body.links, i)
         columns, correct = R.left_reward(seg, goal_left, press, energy, self.guitar)
+        if self.config.margin_reward:
+            columns = columns + self.config.margin_reward * R.margin_reward(seg, goal_left, self.guitar)
         thumb = self.to_guitar(data.site_xpos[self.hands[i].thumb_tip])
         return columns, correct, press, tips, R.left_failed(body.links[i, 0, :3], seg, thumb, self.guitar)
 

@@ -9,7 +9,7 @@ import jax.numpy as jnp
 
 from dexguitar.world import detect
 from dexguitar.world.geometry import point_segment_distance
-from dexguitar.world.guitar import GUITAR, N_STRINGS, Guitar
+from dexguitar.world.guitar import GUITAR, N_STRINGS, PRESS_DISTANCE, Guitar
 from dexguitar.world.hands import FINGERS
 
 N_FINGERS = len(FINGERS)
@@ -73,6 +73,40 @@ def left_reward(segments, goal, press, energy, guitar: Guitar = GUITAR):
     # Eq. 7. The paper writes "- 0.05 r_energy", which would reward motion since r_energy = 1 when still; the
     # authors' code adds it, which is what makes it an energy term (needed to learn).
     return 0.8 * r_string + 0.2 * r_correct + 0.05 * energy, r_correct
+
+
+def press_margins(segments, goal, guitar: Guitar = GUITAR, threshold: float = PRESS_DISTANCE):
+    """(6,) signed room (m) by which each string's detected fret is its goal's: positive when `pressed_frets` gives the
+    goal and would still give it were any finger axis moved by less than this, negative by how far it is from it.
+
+    Press fret k: the best segment's least of (threshold - its distance) and its distance inside fret space k, against
+    every segment over a higher fret staying clear of the threshold (the highest fret wins). Open: every segment over
+    the fretboard clear of the threshold. Mute: +inf (anything goes).
+    """
+    dist2, y = detect.string_contacts(segments, guitar)                   # (S, 6)
+    dist = jnp.sqrt(jnp.maximum(dist2, 1e-12))
+    frets = detect.fret_at(y, guitar)                                     # (S, 6)
+    wires = jnp.asarray(guitar.fret_y, y.dtype)                           # (n_frets + 1,), decreasing
+    k = jnp.clip(goal, 1, guitar.n_frets)[None, :]                        # (1, 6)
+    inside = jnp.minimum(wires[k - 1] - y, y - wires[k])                  # (S, 6) > 0 within fret space k
+    press = jnp.max(jnp.minimum(threshold - dist, inside), axis=0)
+    clear = dist - threshold
+    higher = jnp.min(jnp.where(frets > k, clear, jnp.inf), axis=0)
+    opened = jnp.min(jnp.where(frets > 0, clear, jnp.inf), axis=0)
+    return jnp.where(goal > 0, jnp.minimum(press, higher), jnp.where(goal < 0, opened, jnp.inf))
+
+
+MARGIN_SCALE = 0.003          # m: the margin reward is linear in a string's press margin up to 3 mm either way
+
+
+def margin_reward(segments, goal, guitar: Guitar = GUITAR):
+    """(6,) in [-1, 1]: each string's `press_margins` over MARGIN_SCALE, clipped; 1 for a muted string.
+
+    Not in the paper. Eq. 4's press term is flat within millimetres of its target (exp(-1000 d^2) is 0.98 at 4 mm)
+    and r_correct is a step, so nothing in Eq. 7 pays for playing a note with room to spare, where the IK planner
+    leaves under 1 mm in 2-38 % of its held presses (experiments/press_margins.py). It did not make PPO improve the
+    planner (experiments/left_general_margin.py)."""
+    return jnp.clip(press_margins(segments, goal, guitar) / MARGIN_SCALE, -1.0, 1.0)
 
 
 def hand_energy(wrist_velocity, tip_velocities):
