@@ -8,7 +8,6 @@ import pytest
 
 from dexguitar import envs
 from dexguitar.envs import rewards as R
-from dexguitar.music import cursor as CU
 from dexguitar.music import timeline as TL
 from dexguitar.music.song import Song, make_note
 
@@ -75,16 +74,14 @@ def test_non_finite_physics_terminates_and_resets_only_that_env(left):
 
 
 def test_margin_reward_adds_each_strings_press_margin(left):
-    env, reset, step = left
+    env, reset, _ = left
     paid = envs.make("left", [scale_song(), chord_song()], episode_frames=12, margin_reward=0.5)
-    state = reset(jax.random.split(jax.random.PRNGKey(0), N_ENVS))
-    action = 0.05 * jax.random.normal(jax.random.PRNGKey(1), (N_ENVS, env.action_size))
-    plain, more = step(state, action), jax.jit(jax.vmap(paid.step))(state, action)
-    seg = jax.vmap(lambda d: env.segments(d, env.hands[0]))(plain.body.data)
-    goal = jax.vmap(lambda c: CU.current(c)[0])(state.cursor)
-    extra = 0.5 * jax.vmap(R.margin_reward)(seg, goal)
+    state = jax.tree.map(lambda x: x[1], reset(jax.random.split(jax.random.PRNGKey(0), N_ENVS)))
+    goal = jnp.asarray([-1, 3, 2, 0, 5, -1], jnp.int32)
+    plain, more = (jax.jit(lambda s, e=e: e.left_part(s, s.body, goal)[0])(state) for e in (env, paid))
+    extra = 0.5 * R.margin_reward(env.segments(state.body.data, env.hands[0]), goal)
     assert np.abs(np.asarray(extra)).max() > 0.1
-    np.testing.assert_allclose(np.asarray(more.reward), np.asarray(plain.reward + extra), atol=1e-5)
+    np.testing.assert_allclose(np.asarray(more), np.asarray(plain + extra), atol=1e-6)
 
 
 def test_training_window_is_a_rest_then_song_notes(left):
