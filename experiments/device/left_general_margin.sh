@@ -1,11 +1,11 @@
 #!/bin/bash
 # On the device (carry .data and .cache/plans, the plans of the 128 training songs, the 48 held-out songs and the
 # official ones, made on a CPU and packed by experiments/pack_plans.py): the margin-paid general left hand
-# (experiments/left_general_margin.py) for MIN minutes on 128 procedural songs, resuming /tmp/runs/left_general_margin when a warm
-# machine still has it; then its exported policy played as it is and with DRAWS offsets (experiments/perturbed_eval.py)
+# (experiments/left_general_margin.py) for MIN minutes on 128 procedural songs, resuming the run a warm machine still
+# holds in /tmp/runs; then its exported policy played as it is and with DRAWS offsets (experiments/perturbed_eval.py)
 # on the 48 held-out procedural songs (seed 2) and the 15 official ones.
-# Usage: bash left_general_margin.sh MIN [DRAWS]   (MIN 0: no training; no DRAWS: no evaluation; MIN 4 and DRAWS 2
-# fit one 10-minute call). CONFIG=experiments/left_general_margin_free.py: the same without the prior (its own run).
+# Usage: bash left_general_margin.sh MIN [DRAWS]   (MIN 0: no training; no DRAWS: no evaluation; MIN 7.5 took 474 s
+# of a fresh machine, DRAWS 2 130 s). CONFIG=experiments/left_general_margin_free.py: the same without the prior.
 set -e
 [ -d /tmp/site ] || { tar xJf .data/site.txz -C /tmp && mv /tmp/slim /tmp/site; }
 mkdir -p /tmp/plans; cp .cache/plans/*.npz /tmp/plans/ 2>/dev/null || true
