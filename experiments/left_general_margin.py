@@ -16,7 +16,7 @@ Measured (results/general_left/session34/, one H100, 128 songs, 9.8e7 samples in
 rise, the residual stayed at a prior KL of 0.005 per state, and the hand plays as the planner with a micro-offset
 (0.771 against the planner's 0.772 with offsets on 48 held-out songs; 0.988 against 0.987 on the official ones).
 
-    dexguitar train --hand left --style general --procedural 128 --config experiments/left_general_margin.py \
+    dexguitar train --hand left --style general --procedural 128 --config experiments/left_general_margin.py \\
         --out runs/left-general-margin --max-minutes 7.5
 """
 import dataclasses

@@ -8,7 +8,7 @@ reward fell from 1.62 to 1.52 per string and step, F1 on the training windows fr
 0.664 on 48 held-out songs (the planner with offsets: 0.772) and 0.947 on the official ones (0.987).
 
     dexguitar train --hand left --style general --procedural 128 --config experiments/left_general_margin_free.py \\
-        --out runs/left-general-margin-free --max-minutes 7
+        --out runs/left-general-margin-free --max-minutes 7.5
 """
 import dataclasses
 import os

@@ -8,7 +8,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from dexguitar.world import detect
-from dexguitar.world.geometry import point_segment_distance
+from dexguitar.world.geometry import LEN2_EPS, point_segment_distance
 from dexguitar.world.guitar import GUITAR, N_STRINGS, PRESS_DISTANCE, Guitar
 from dexguitar.world.hands import FINGERS
 
@@ -84,7 +84,7 @@ def press_margins(segments, goal, guitar: Guitar = GUITAR, threshold: float = PR
     the fretboard clear of the threshold. Mute: +inf (anything goes).
     """
     dist2, y = detect.string_contacts(segments, guitar)                   # (S, 6)
-    dist = jnp.sqrt(jnp.maximum(dist2, 1e-12))
+    dist = jnp.sqrt(jnp.maximum(dist2, LEN2_EPS))
     frets = detect.fret_at(y, guitar)                                     # (S, 6)
     wires = jnp.asarray(guitar.fret_y, y.dtype)                           # (n_frets + 1,), decreasing
     k = jnp.clip(goal, 1, guitar.n_frets)[None, :]                        # (1, 6)
