@@ -16,8 +16,9 @@ How it plays, per hand, before the rollout (`perform.scripted.ScriptedPlayer.pla
    directions chosen over the whole song (alternate picking on one string, a sweep on to the next string), lifted
    4 mm above the strings only over a string it passes without picking it.
 2. Joint targets by least squares on MuJoCo C kinematics (`motion.kinematics.HandKinematics`; cached per keyframe,
-   warm-started), joined by minimum-jerk interpolation with per-finger timing that anticipates the onset wherever
-   an early press cannot spoil the previous note.
+   warm-started; from version 21 on solved to convergence, so that a plan does not depend on the CPU's rounding:
+   `_fit`), joined by minimum-jerk interpolation with per-finger timing that anticipates the onset wherever an early
+   press cannot spoil the previous note.
 3. `Tracker`: the hands are slow PD systems (kp = 10; the 0.2 kg wrist rings for ~0.5 s), so the desired joint
    trajectory is turned into PD targets by a one-step inverse model, computed by finite differences with
    `mujoco.rollout` on the same model the env uses. The result is an open-loop action sequence for the env.
@@ -178,6 +179,61 @@ def _clearance(a0, a1, b0, b1, n=9):
     t = np.linspace(0, 1, n)[:, None]
     d2, _ = point_segment_distance(a0[None] + t * (a1 - a0)[None], b0[None], b1[None])
     return np.sqrt(d2.min())
+
+
+# ------------------------------------------------------------------------------------------------- least squares
+
+def _fit(residual, x0, lo, hi, jac=None, iters: int = 1000, tol: float = 1e-10, h: float = 1e-6) -> np.ndarray:
+    """argmin |residual(x)|^2 over lo <= x <= hi, run until no step lowers it: Levenberg-Marquardt, a variable
+    that a step would take out of its bounds held at the bound. jac(x): the Jacobian (default: central differences).
+
+    The hand's IK problems are ill-conditioned (posture terms of weight 0.01-0.02 beside targets of weight 10-30). A
+    solver stopped by a relative cost tolerance (`scipy.optimize.least_squares`'s ftol) halts somewhere along the
+    flat valley, and where is decided by rounding: the BLAS kernels of two CPUs put a hand position 0.03 rad apart
+    and the barre hand 0.2 rad, and a barre trial holds on one and not on the other. Run to convergence, a solve
+    gives the valley's minimum, the same to ~1e-8 whatever the rounding (`tests/test_plan_robustness.py`)."""
+    if jac is None:
+        eye = h * np.eye(len(x0))
+        jac = lambda x: np.stack([residual(x + e) - residual(x - e) for e in eye], axis=1) / (2 * h)  # noqa: E731
+    x = np.clip(np.asarray(x0, float), lo, hi)
+    r = residual(x)
+    cost, mu = r @ r, 1e-3
+    for _ in range(iters):
+        J = jac(x)
+        g, A = J.T @ r, J.T @ J
+        scale = np.diag(A) + 1e-12
+        held = ((x <= lo) & (g > 0)) | ((x >= hi) & (g < 0))        # pressed against a bound
+        step = None
+        while step is None and mu < 1e12:
+            dx, fixed = np.zeros_like(x), held.copy()
+            for _ in range(len(x)):                                  # hold those a step would take beyond a bound
+                free = ~fixed
+                rhs = g[free] + A[np.ix_(free, fixed)] @ dx[fixed]
+                dx[free] = np.linalg.solve(A[np.ix_(free, free)] + mu * np.diag(scale[free]), -rhs)
+                over = free & ((x + dx < lo) | (x + dx > hi))
+                if not over.any():
+                    break
+                dx[over] = np.clip(x + dx, lo, hi)[over] - x[over]
+                fixed |= over
+            xn = np.clip(x + dx, lo, hi)
+            rn = residual(xn)
+            if rn @ rn < cost:
+                step = np.abs(xn - x).max()
+                x, r, cost, mu = xn, rn, rn @ rn, max(mu / 3, 1e-9)
+            else:
+                mu *= 4
+        if step is None or step < tol:
+            break
+    return x
+
+
+def _body_jac(k: HandKinematics, bid: int) -> np.ndarray:
+    """(3, 27) Jacobian of a body origin's guitar-frame position w.r.t. the hand's joints (after `k.set`), as
+    `HandKinematics.site_jac` is for a site."""
+    mujoco.mj_comPos(k.model, k.data)
+    jp = np.zeros((3, k.model.nv))
+    mujoco.mj_jacBody(k.model, k.data, jp, None, bid)
+    return k.g_rot.T @ jp[:, k.qadr]
 
 
 # ------------------------------------------------------------------------------------------------- right hand
@@ -626,8 +682,10 @@ POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fi
 # across two strings where the note before presses them lower (a double stop hammered on) lands a frame sooner, where
 # the note before can spare it (`ScriptedLeft.desired`); 21 a finger that lets go of a place for a note that wants its
 # string open, and presses it again after, hovers over its own fret instead of over that place where it cannot get
-# its tip `open_clear` above the strings there (a stretch beyond its own fret; `ScriptedLeft.configs`).
+# its tip `open_clear` above the strings there (a stretch beyond its own fret; `ScriptedLeft.configs`); and its IK
+# runs to convergence, so that CPUs that round differently plan alike (`CONVERGED`).
 LATEST = 21
+CONVERGED = 21          # from this version on hand positions, barre hands and finger poses are solved by `_fit`
 PAIR = 10               # a finger pressing strings s and s + 1 (0-based) at one fret: "string" PAIR + s (version 7)
 BARRE = 20              # the index across all six strings at one fret: "string" BARRE (version 12)
 BARRE_POSITIONS = 100   # hand position BARRE_POSITIONS + k: the barre hand at fret k (`ScriptedLeft.barre_position`)
@@ -697,7 +755,7 @@ class ScriptedLeft:
     def _constants(self) -> tuple:
         """What the solves read besides their keys: the class and its geometry and timing constants."""
         return (type(self), self.hover, self.press_depth, self.clearance, self.land_frames, self.shift_frames,
-                self.check_frames, self.posture.tobytes())
+                self.check_frames, self.posture.tobytes(), self.version >= CONVERGED)
 
     # --- geometry helpers
     def fret_mid(self, k: int) -> float:
@@ -756,17 +814,45 @@ class ScriptedLeft:
                     out.append(30 * (k.site(hand.tips[f]) - self.press_point(s, frets[f], f)))
             return np.concatenate(out)
 
+        def jacobian(z):                                      # of `residual`, row for row
+            q = z[:27]
+            k.set(q)
+            J = np.zeros((67, len(z)))
+            for f, site in enumerate(hand.tips + (hand.thumb_tip,)):
+                J[3 * f:3 * f + 3, :27] = 10 * k.site_jac(site)
+            for f in range(4):
+                if 0.04 - g.sign * k.body(hand.segments[f][0])[0] > 0:
+                    J[15 + f, :27] = -10 * g.sign * _body_jac(k, hand.segments[f][0])[0]
+            J[19:40, 6:27] = 0.02 * np.eye(21)
+            J[40:43, 3:6] = 0.02 * np.eye(3)
+            for j in range(2):
+                for f in range(4):
+                    qq, cols = q.copy(), slice(27 + 16 * j + 4 * f, 31 + 16 * j + 4 * f)
+                    qq[FINGER_DOFS[f]] = z[cols]
+                    k.set(qq)
+                    row = 43 + 12 * j + 3 * f
+                    Jf = 30 * k.site_jac(hand.tips[f])
+                    J[row:row + 3, cols] = Jf[:, FINGER_DOFS[f]]
+                    Jf[:, FINGER_DOFS[f]] = 0.0
+                    J[row:row + 3, :27] = Jf
+            return J
+
         z0 = np.concatenate([q0, q0[11:], q0[11:]])
         lo = np.concatenate([k.lo, k.lo[11:], k.lo[11:]])
         hi = np.concatenate([k.hi, k.hi[11:], k.hi[11:]])
-        sol = least_squares(residual, np.clip(z0, lo + 1e-6, hi - 1e-6), bounds=(lo, hi), ftol=1e-6, xtol=1e-6)
-        self._positions[p] = sol.x[:27]
+        if self.version >= CONVERGED:
+            self._positions[p] = _fit(residual, z0, lo, hi, jacobian)[:27]
+        else:
+            sol = least_squares(residual, np.clip(z0, lo + 1e-6, hi - 1e-6), bounds=(lo, hi), ftol=1e-6, xtol=1e-6)
+            self._positions[p] = sol.x[:27]
         return self._positions[p]
 
     def barre_position(self, fret: int) -> np.ndarray:
         """27 joint values of the barre hand at `fret` (version 12): the index's axis through every string's point
         in the middle of the fret space, at the height of a pressing fingertip's axis, the other fingertips hovering
-        over the next three frets and the thumb behind the neck; wrist free, from hand position `fret`."""
+        over the next three frets and the thumb behind the neck; wrist free, from hand position `fret`. From
+        version `CONVERGED` on each string's term is its point's offset from its foot on the nearest index segment:
+        the same cost as the distance, and smooth where it vanishes, so that the solve converges."""
         k, hand, g = self.kin, self.kin.hand, self.guitar
         y = self.fret_mid(fret)
         z = g.fretboard_z + H.RADII["index"][1] - self.press_depth
@@ -776,14 +862,22 @@ class ScriptedLeft:
         def residual(q):
             k.set(q)
             seg = k.segments()[:3]
-            d2 = np.stack([point_segment_distance(points, a, b)[0] for a, b in seg])    # (3 segments, 6 strings)
-            out = [30 * np.sqrt(d2.min(axis=0) + 1e-12)]
+            if self.version >= CONVERGED:         # each string's point to its foot on the nearest index segment
+                d2, t = point_segment_distance(points[:, None], seg[None, :, 0], seg[None, :, 1])    # (6, 3)
+                near = np.argmin(d2, axis=1)
+                a, b = seg[near, 0], seg[near, 1]
+                out = [30 * (a + t[np.arange(N_STRINGS), near][:, None] * (b - a) - points).ravel()]
+            else:
+                d2 = np.stack([point_segment_distance(points, a, b)[0] for a, b in seg])    # (3 segments, 6 strings)
+                out = [30 * np.sqrt(d2.min(axis=0) + 1e-12)]
             out += [10 * (k.site(hand.tips[f]) - self.hover_point(self.mid_x(frets[f]), frets[f])) for f in (1, 2, 3)]
             out.append(10 * (k.site(hand.thumb_tip) - [-0.008 * g.sign, self.fret_mid(frets[1]) + 0.01, -0.02]))
             out.append(0.01 * (q[6:] - self.posture))
             return np.concatenate(out)
 
         q0 = self.position(fret)
+        if self.version >= CONVERGED:
+            return _fit(residual, q0, k.lo, k.hi)
         sol = least_squares(residual, np.clip(q0, k.lo + 1e-6, k.hi - 1e-6), bounds=(k.lo, k.hi), ftol=1e-8,
                             xtol=1e-8)
         return sol.x
@@ -814,10 +908,12 @@ class ScriptedLeft:
             return np.concatenate(out)
 
         x0 = base[dofs]
-        sol = least_squares(residual, np.clip(x0, k.lo[dofs] + 1e-6, k.hi[dofs] - 1e-6),
-                            bounds=(k.lo[dofs], k.hi[dofs]))
-        self._fingers[key] = sol.x
-        return sol.x
+        lo, hi = k.lo[dofs], k.hi[dofs]
+        x = least_squares(residual, np.clip(x0, lo + 1e-6, hi - 1e-6), bounds=(lo, hi)).x
+        if self.version >= CONVERGED:           # to the minimum of the basin that solve found (a stretch has several)
+            x = _fit(residual, x, lo, hi)
+        self._fingers[key] = x
+        return x
 
     # --- the schedule
     def fingering(self, notes: Notes):
