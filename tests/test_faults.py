@@ -1,9 +1,11 @@
 """Faults survived and bad input refused (issue #14): non-finite numbers in training, a damaged checkpoint, a save
-written in the background while training goes on or killed half-written, a run directory in use or made with another
-setup, a kill between a checkpoint and its metrics row, and every command given bad paths: one line and exit code 2,
-never a traceback. The training runs share the tiny left-hand trainer of tests/test_learn.py (same program, so the
-persistent compilation cache serves it)."""
+written in the background while training goes on or killed half-written, a full disk, a run directory in use or made
+with another setup, a kill between a checkpoint and its metrics row or before the first checkpoint, and every command
+given bad paths: one line and exit code 2, never a traceback. The training runs share the tiny left-hand trainer of
+tests/test_learn.py (same program, so the persistent compilation cache serves it)."""
+import errno
 import json
+import logging
 import shutil
 
 import jax
@@ -89,6 +91,167 @@ def test_a_damaged_latest_checkpoint_falls_back_to_the_previous_one(tmp_path, ca
     shutil.rmtree(tmp_path / "1")
     with pytest.raises(RunError, match="no intact checkpoint"):
         C.restore(tmp_path, tree)
+
+
+def _damage(path, how):
+    if how == "deleted":
+        path.unlink()
+    else:                                   # cut in half: a copy or a write cut short
+        path.write_bytes(path.read_bytes()[:path.stat().st_size // 2])
+
+
+def test_a_damaged_newest_step_any_file_is_set_aside_and_written_again(tmp_path):
+    """Every file of the newest step, deleted or cut in half: either the step still restores exactly what was saved,
+    or the step before it comes back, the damaged one is renamed out of orbax's steps and the run writes that step
+    again (orbax refuses to write a step that exists)."""
+    one = {"a": jnp.arange(5000.0), "b": jnp.ones((2, 3)), "c": jnp.int32(7)}
+    two = jax.tree.map(lambda x: x + 1, one)
+    base = tmp_path / "base"
+    C.save(base, 1, one)
+    C.save(base, 2, two)
+    template = jax.tree.map(jnp.zeros_like, one)
+    files = sorted(f.relative_to(base / "2") for f in (base / "2").rglob("*") if f.is_file())
+    fell_back = set()
+    for f in files:
+        for how in ("deleted", "halved"):
+            case = tmp_path / f"{how}-{str(f).replace('/', '_')}"
+            shutil.copytree(base, case)
+            _damage(case / "2" / f, how)
+            restored, step = C.restore(case, template, set_damaged_aside=True)
+            if step == 2:                                           # the damage did not touch what is read
+                assert all(np.array_equal(restored[k], two[k]) for k in one), (f, how)
+                continue
+            fell_back.add((str(f), how))
+            assert step == 1 and all(np.array_equal(restored[k], one[k]) for k in one), (f, how)
+            assert C.steps(case) == [1] and [p.name[:10] for p in case.glob("2.*")] == ["2.damaged-"]
+            if len(fell_back) > 1:
+                continue
+            with C.Saver(case) as saver:                            # the run goes on past the damaged step
+                saver.save(2, jax.tree.map(lambda x: 3 * x, one))
+                saver.save(3, jax.tree.map(lambda x: 4 * x, one))
+            assert C.steps(case) == [3, 2]
+            np.testing.assert_array_equal(C.restore(case, template)[0]["a"], 4 * np.arange(5000.0))
+            np.testing.assert_array_equal(C.restore(case, template, step=2)[0]["a"], 3 * np.arange(5000.0))
+    data = [str(f) for f in files if f.parent.name == "d"]
+    # the manifests and the data files that hold the values cannot be lost without the fall-back
+    assert {("default/manifest.ocdbt", h) for h in ("deleted", "halved")} <= fell_back
+    assert any((d, "halved") in fell_back for d in data) and any((d, "deleted") in fell_back for d in data)
+
+
+def test_a_resumed_run_goes_past_its_damaged_newest_checkpoint(trainer, tmp_path):
+    """The newest checkpoint, that of the run's last iteration, has a data file cut in half: --resume restores the one
+    before, sets the damaged one aside and trains that iteration again (a step orbax would refuse to write where it
+    exists)."""
+    run = tmp_path / "run"
+    RUN.train(trainer, run, iterations=2, progress=False, log=lambda m: None)
+    files = [f for f in (run / "ckpt" / "2").rglob("*") if f.is_file()]
+    _damage(max(files, key=lambda f: f.stat().st_size), "halved")
+    messages = []
+    summary = RUN.train(trainer, run, iterations=2, resume=True, progress=False, log=messages.append)
+    assert "resumed" in messages[0] and "at iteration 1" in messages[0]
+    assert summary["iteration"] == 2 and summary["calls"] == 1
+    assert C.steps(run / "ckpt") == [2, 1] and len(list((run / "ckpt").glob("2.damaged-*"))) == 1
+    restored, step = C.restore(run / "ckpt", trainer.init())
+    assert step == 2 and int(restored.iteration) == 2 and finite(restored.params)
+    assert [json.loads(r)["iteration"] for r in (run / "metrics.jsonl").read_text().splitlines()] == [1, 2]
+
+
+class FullDisk:
+    """Orbax's background write of a step's `_METADATA` (a write of every save) into `directory`, from step `full`
+    on, writes half of it and then fails as a full disk does."""
+
+    def __init__(self, monkeypatch, directory, full: int):
+        from etils import epath
+        self.hits = []
+        write = epath.Path.write_text
+
+        def write_text(path, text, *args, **kwargs):
+            name = str(path)
+            if name.startswith(str(directory)) and name.endswith("/_METADATA") and int(
+                    name[len(str(directory)) + 1:].split(".")[0]) >= full:
+                self.hits.append(name)
+                write(path, text[:len(text) // 2], *args, **kwargs)
+                raise OSError(errno.ENOSPC, "No space left on device", name)
+            return write(path, text, *args, **kwargs)
+        monkeypatch.setattr(epath.Path, "write_text", write_text)
+
+
+def test_a_full_disk_ends_a_save_in_one_error_and_keeps_the_step_before(tmp_path, monkeypatch, capfd, caplog):
+    tree = {"a": np.arange(1000.0)}
+    full = FullDisk(monkeypatch, tmp_path / "ck", full=3)
+    with pytest.raises(RunError) as err:
+        with C.Saver(tmp_path / "ck") as saver:
+            for step in (1, 2, 3, 4):
+                saver.save(step, {"a": tree["a"] + step})
+    assert full.hits and "\n" not in str(err.value)
+    assert str(err.value) == (f"{tmp_path / 'ck'}: the disk is full (no space left on device); the newest complete "
+                              "checkpoint, step 2, is kept. Free some space and continue with --resume")
+    assert sorted(p.name for p in (tmp_path / "ck").iterdir()) == ["1", "2"]    # no half-written step 3
+    restored, step = C.restore(tmp_path / "ck", tree)
+    assert step == 2 and float(restored["a"][5]) == 7.0
+    out = capfd.readouterr()
+    assert "Traceback" not in out.err + out.out and "Exception ignored" not in out.err
+    assert not [r for r in caplog.records if r.levelno >= logging.ERROR]          # orbax's reports are silenced
+    # TensorStore's own report of it, as orbax raises it
+    assert C.disk_full(ValueError('RESOURCE_EXHAUSTED: Error writing "00001/0.0" in OCDBT database at local file '
+                                  '"/x/ckpt/2.orbax-checkpoint-tmp/": Failed to write 10436608 bytes to file 24: No '
+                                  "space left on device [os_error_code='28']"))
+    assert not C.disk_full(ValueError("OUT_OF_RANGE: Requested byte range [3, 9) is not valid for value of size 5"))
+
+
+def test_a_run_that_fills_the_disk_stops_in_one_line_and_resumes(trainer, tmp_path, monkeypatch, capfd):
+    """The save of iteration 2 finds the disk full: the run ends with one RunError naming the run and the step kept,
+    leaves nothing half-written, and --resume, once there is space, continues from iteration 1 with its metrics."""
+    run = tmp_path / "run"
+    full = FullDisk(monkeypatch, run / "ckpt", full=2)
+    with pytest.raises(RunError) as err:
+        RUN.train(trainer, run, iterations=2, progress=False, log=lambda m: None)
+    assert full.hits
+    assert str(err.value).startswith(f"{run}: the disk is full") and "step 1, is kept" in str(err.value)
+    assert sorted(p.name for p in (run / "ckpt").iterdir()) == ["1"]
+    out = capfd.readouterr()
+    assert "Traceback" not in out.err and "Exception ignored" not in out.err
+    monkeypatch.undo()                                                   # space again
+    messages = []
+    summary = RUN.train(trainer, run, iterations=2, resume=True, progress=False, log=messages.append)
+    assert "at iteration 1" in messages[0] and summary["iteration"] == 2 and summary["calls"] == 1
+    assert C.steps(run / "ckpt") == [2, 1] and C.steps(run / "resume") == [2]
+    assert [json.loads(r)["iteration"] for r in (run / "metrics.jsonl").read_text().splitlines()] == [1, 2]
+
+
+def test_a_full_disk_while_writing_metrics_is_one_error(trainer, tmp_path, monkeypatch):
+    """A metrics row that cannot be written (the disk filled up between two saves): one RunError, and the run's
+    checkpoints are complete."""
+    run = tmp_path / "run"
+    real_open = open
+
+    def full_open(path, mode="r", *args, **kwargs):
+        if str(path) == str(run / "metrics.jsonl") and "a" in mode:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real_open(path, mode, *args, **kwargs)
+    monkeypatch.setattr("builtins.open", full_open)
+    with pytest.raises(RunError, match=r"the disk is full .* step 1, is kept"):
+        RUN.train(trainer, run, iterations=2, progress=False, log=lambda m: None)
+    monkeypatch.undo()
+    assert C.steps(run / "ckpt") == [1] and C.steps(run / "resume") == [1]
+
+
+def test_a_resume_without_a_checkpoint_starts_afresh_and_says_so(trainer, tmp_path, monkeypatch):
+    """Killed after its first metrics row and before its first checkpoint was complete: --resume says that it starts
+    again from iteration 0 and drops that row."""
+    run = tmp_path / "run"
+    seen, fresh = {}, trainer.init()
+    monkeypatch.setattr(trainer, "init", lambda key=None: fresh)                    # one first state for both runs
+    monkeypatch.setattr(RUN, "chunk_build", lambda *args: None)                    # nothing is trained here
+    monkeypatch.setattr(RUN, "_loop", lambda trainer, run, where, state, *rest: seen.update(state=state) or {})
+    RUN.train(trainer, run, iterations=2, progress=False, log=lambda m: None)       # writes config.json
+    (run / "metrics.jsonl").write_text(json.dumps({"iteration": 1}) + "\n")
+    assert C.steps(run / "ckpt") == [] and C.steps(run / "resume") == []
+    messages = []
+    RUN.train(trainer, run, iterations=2, resume=True, progress=False, log=messages.append)
+    assert [m for m in messages if "no checkpoint" in m] == [f"{run} holds no checkpoint yet: the run starts again "
+                                                              "from iteration 0"]
+    assert int(seen["state"].iteration) == 0 and (run / "metrics.jsonl").read_text() == ""
 
 
 def test_a_background_save_holds_what_was_saved_while_a_donating_step_reuses_the_buffers(tmp_path):

@@ -3,10 +3,11 @@ only logs and saves; all learning happens inside the jitted chunk.
 
 A run directory holds `config.json` (how the run was made: compared on --resume), `ckpt/` (the last few whole train
 states), `resume/` (the last compact state: what a run cannot rebuild, to carry a long run from machine to machine),
-`metrics.jsonl` (one row per host call, written after its checkpoints, so a kill never leaves a row without one) and
-`policy/` (the export). A lock file keeps a second process out of a directory in use. Non-finite parameters
-are never saved: the run rolls back to its last good checkpoint with a new random key and stops after repeated
-failures.
+`metrics.jsonl` (one row per host call, written while its checkpoints are still being written: --resume drops the
+rows past the checkpoint it restores, all of them where there is none) and `policy/` (the export). A lock file keeps a
+second process out of a directory in use. Non-finite parameters are never saved: the run rolls back to its last good
+checkpoint with a new random key and stops after repeated failures. A full disk ends the run with one error naming
+the run and its newest complete checkpoint, from which --resume continues.
 """
 from __future__ import annotations
 
@@ -256,7 +257,7 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
         state = trainer.init()
         shardings = where.shardings(state)
         if resume and has_ckpt:            # restored straight into this run's placement, whatever the saved one
-            state, step = C.restore(run.ckpt, where.put(state, shardings))
+            state, step = C.restore(run.ckpt, where.put(state, shardings), set_damaged_aside=where.main)
             run.truncate_metrics(step)
             log(f"resumed {run.path} at iteration {int(state.iteration)}")
         elif resume and has_compact:       # carried from another machine: the whole state stayed there
@@ -266,10 +267,15 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
             run.truncate_metrics(step)
             log(f"resumed {run.path} at iteration {step} from its compact state (envs, replay buffers and Adam "
                 "start afresh)")
-        elif init_from:
+        elif resume:                       # killed before its first checkpoint was complete
+            run.truncate_metrics(0)
+            log(f"{run.path} holds no checkpoint yet: the run starts again from iteration 0")
+        if init_from and not (resume and (has_ckpt or has_compact)):
             params = PO.load(init_from)[0]
             state = state.replace(params=dict(state.params, policy=params["policy"]), obs_norm=params["obs_norm"])
             log(f"policy initialized from {init_from} ({meta_init.get('samples', 0):,} samples)")
+        if build is None and int(state.iteration) < iterations:    # the newest step was damaged: an older one came
+            build = chunk_build(trainer, where, data, log)
         if where.main and (not resume or not run.config.exists()):
             tmp = run.config.with_suffix(".tmp")
             tmp.write_text(json.dumps(record, indent=2))
@@ -279,6 +285,10 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
                 f"samples each")
         return _loop(trainer, run, where, where.put(state, shardings), data, build, iterations,
                      progress and where.main, stop_after_calls, max_minutes, on_call, log)
+    except (OSError, C.DiskFull) as err:     # the saves are complete or abandoned by now: say which step is kept
+        if isinstance(err, OSError) and not C.disk_full(err):
+            raise
+        raise RunError(C.full_message(run.path, C.latest_step(run.ckpt))) from None
     finally:
         run.close()
 
@@ -308,7 +318,8 @@ def _loop(trainer, run, where, state, data, build, iterations, progress, stop_af
     # the saves and the export of one chunk are written while the next one runs; leaving the block (the end, an
     # error, Ctrl-C) waits until they are complete on disk
     with C.Saver(run.ckpt) as ckpt, C.Saver(run.compact, keep=1, only=compact) as resume_state, \
-            (C.Saver(run.path / "policy" / "params", keep=1) if where.main else contextlib.nullcontext()) as policy:
+            (C.Saver(run.path / "policy" / "params", keep=1) if where.main else contextlib.nullcontext()) as policy, \
+            (bar if bar is not None else contextlib.nullcontext()):     # closed first: an error's line stands alone
         while int(state.iteration) < iterations:
             t0 = time.perf_counter()
             new, metrics = chunk(state, data)
@@ -363,8 +374,6 @@ def _loop(trainer, run, where, state, data, build, iterations, progress, stop_af
             if max_minutes is not None and time.perf_counter() - t_start > 60 * max_minutes:
                 log(f"stopping after {max_minutes} minutes at iteration {it} (resume with --resume)")
                 break
-    if bar is not None:
-        bar.close()
     return dict(summary, compile_s=compile_s, calls=calls)
 
 
