@@ -5,6 +5,8 @@ it. Anything else that escapes to the CLI is a bug in dexguitar, not in the user
 """
 from __future__ import annotations
 
+import os
+import stat
 from pathlib import Path
 
 
@@ -31,12 +33,32 @@ class TrainingDiverged(UserError):
     """Training produced non-finite numbers again and again, even after rolling back to the last good checkpoint."""
 
 
+_SPECIAL_FILES = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+                  (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
+def special_file(path: str | Path) -> str | None:
+    """What `path` is when it exists but is no regular file ("a FIFO (named pipe)", "a directory", ...), else None.
+    Found with `stat`, which never blocks: opening a FIFO waits for a writer, forever if none comes."""
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):      # missing, unreadable, or a name with a NUL byte: open() says which
+        return None
+    if stat.S_ISREG(mode):
+        return None
+    return next((name for test, name in _SPECIAL_FILES if test(mode)), "not a regular file")
+
+
 def read_input(path: str | Path, what: str, error=InputError, limit: int | None = None, why_limit: str = "",
                empty_ok: bool = False) -> bytes:
     """The bytes of a user's file, or `error(path, None, why)` when it is missing, a directory, unreadable, empty
     (unless `empty_ok`: the caller says what an empty file is not) or larger than `limit` bytes. At most `limit` + 1
-    bytes are read, so an oversized file is refused at once."""
+    bytes are read, so an oversized file is refused at once. A special file (a FIFO, a device, a socket) is refused
+    before it is opened."""
     path = Path(path)
+    kind = special_file(path)
+    if kind is not None:
+        raise error(path, None, f"is {kind}, not {what}")
     try:
         with open(path, "rb") as f:
             data = f.read(-1 if limit is None else limit + 1)

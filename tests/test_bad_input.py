@@ -3,23 +3,39 @@ as one line) naming the file and the position, and valid but unusual songs work.
 expected number is worked out by hand in the comments."""
 import gzip
 import json
+import math
+import os
+import re
+import socket
+import threading
 import time
 from fractions import Fraction as F
+from pathlib import Path
+from types import SimpleNamespace
 
+import guitarpro
+import jax
+import jax.numpy as jnp
 import mido
 import numpy as np
 import pytest
+from flax import struct
 
+from dexguitar import cli
+from dexguitar.cli import build_parser, main, printable
 from dexguitar.errors import InputError, UserError
+from dexguitar.learn import memory as M
 from dexguitar.motion import load_motion
 from dexguitar.motion.format import Motion, MotionError, joint_ranges, save
 from dexguitar.motion.official import read_official_json
 from dexguitar.motion.retarget import RetargetError, read_markers
-from dexguitar.music import load_song
+from dexguitar.music import load_song, load_songs
+from dexguitar.errors import special_file
 from dexguitar.music.song import MUTE as X, Song, SongError, make_note
 from dexguitar.music.tab_ascii import parse_ascii_tab
 from dexguitar.music.tab_json import write_json_tab
 from dexguitar.music.timeline import from_song
+from dexguitar.perform.evaluate import UNDEFINED, dumps, summarize
 from dexguitar.world import hands as H
 
 SYSTEM = "e|0---|\nB|----|\nG|----|\nD|----|\nA|----|\nE|----|\n"   # one open high E, a quarter note
@@ -185,3 +201,257 @@ def test_bad_motion_files(tmp_path):
     for name, message in expected.items():
         e = error_of(load_motion, tmp_path / name, kind=MotionError)
         assert str(e).endswith(message), (name, str(e))
+
+
+# ------------------------------------------------------------------------------------------------ special files
+
+def finishes(fn, *args, seconds=20.0):
+    """What fn(*args) returns or raises, run in a thread that must end within `seconds` (a FIFO's open blocks)."""
+    out = {}
+
+    def run():
+        try:
+            out["value"] = fn(*args)
+        except BaseException as e:          # noqa: BLE001 - handed to the test
+            out["value"] = e
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    thread.join(seconds)
+    assert not thread.is_alive(), f"{fn.__name__} still runs after {seconds} s"
+    return out.get("value")
+
+
+def test_special_files_are_refused_before_any_open(tmp_path, capsys):
+    fifo = tmp_path / "song.json"
+    os.mkfifo(fifo)
+    folder = tmp_path / "folder.txt"
+    folder.mkdir()
+    sock_path = tmp_path / "s.mid"
+    sock = socket.socket(socket.AF_UNIX)
+    sock.bind(str(sock_path))
+    try:
+        kinds = {fifo: "a FIFO (named pipe)", folder: "a directory", sock_path: "a socket",
+                 Path("/dev/null"): "a character device"}
+        for path, kind in kinds.items():
+            assert special_file(path) == kind
+            e = finishes(load_song, path)
+            assert isinstance(e, SongError) and str(e) == f"{path}: is {kind}, not a tab file"
+        assert special_file(tmp_path / "missing.json") is None
+        assert special_file(json_tab(tmp_path / "plain.json", 90, ["1/4"])) is None
+        # eval and train take lists of songs (folders too): a FIFO there is named as such, not "no such file"
+        e = finishes(load_songs, [fifo])
+        assert str(e) == f"{fifo}: is a FIFO (named pipe), not a tab file"
+        # the command: song info and convert say it in one line, exit 2
+        assert finishes(main, ["song", "info", str(fifo)]) == 2
+        assert finishes(main, ["song", "convert", str(fifo), str(tmp_path / "out.json")]) == 2
+        err = capsys.readouterr().err.splitlines()
+        assert err == [f"error: {fifo}: is a FIFO (named pipe), not a tab file"] * 2
+        # every other file a user names is read through `errors.read_input`: a reference motion, for one
+        motion_fifo = tmp_path / "clip.npz"
+        os.mkfifo(motion_fifo)
+        e = finishes(load_motion, motion_fifo)
+        assert isinstance(e, MotionError) and str(e) == f"{motion_fifo}: is a FIFO (named pipe), not a motion file"
+    finally:
+        sock.close()
+
+
+# ------------------------------------------------------------------------------------------------ nothing to play
+
+def test_a_song_of_rests_is_refused_in_every_format(tmp_path):
+    muted = json_tab(tmp_path / "muted.json", 90, ["1/4", "1/2"])
+    data = json.loads(muted.read_text())
+    for note in data[0]["notes"]:
+        note["frets"] = [X] * 6
+    muted.write_text(json.dumps(data))
+    assert str(error_of(load_song, muted, kind=SongError)) == \
+        f"{muted}: nothing to play: all 2 notes are rests (every string muted)"
+    gp_song = guitarpro.Song(title="Rest", tempo=96)             # one standard-tuned guitar track, one measure
+    voice = gp_song.tracks[0].measures[0].voices[0]
+    voice.beats.append(guitarpro.Beat(voice, duration=guitarpro.Duration(value=1), status=guitarpro.BeatStatus.rest))
+    guitarpro.write(gp_song, str(tmp_path / "rest.gp5"))
+    assert str(error_of(load_song, tmp_path / "rest.gp5", kind=SongError)) == \
+        f"{tmp_path / 'rest.gp5'}: nothing to play: its one note is a rest (every string muted)"
+    (tmp_path / "rest.txt").write_text(SYSTEM.replace("0---", "x---"))   # an ASCII tab of a muted strum
+    assert "the tab has no notes" in str(error_of(load_song, tmp_path / "rest.txt", kind=SongError))
+
+
+# ------------------------------------------------------------------------------------------------ NaN never in JSON
+
+def strict_json(text):
+    def refuse(name):
+        raise AssertionError(f"{name} in JSON output")
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_undefined_scores_are_null_with_a_reason_in_json(monkeypatch, capsys):
+    # one open-string note played cleanly: the right hand picked 1 of 1 (F1 1), the left hand had nothing to press
+    # and pressed nothing, so no note concerned it and its F1 is undefined
+    zero = {"precision": 0.0, "recall": 0.0, "f1": 0.0, "tp": 0, "predicted": 0, "targets": 0}
+    row = {"note": 0, "frame": 30, "frets": [0, X, X, X, X, X], "chord": False, "rest": False, "left": zero,
+           "right": {"precision": 1.0, "recall": 1.0, "f1": 1.0, "tp": 1, "predicted": 1, "targets": 1}}
+    summary = summarize([row], ("left", "right"))
+    assert math.isnan(summary["left"]["f1"]) and summary["left"]["notes"] == 0 and summary["right"]["f1"] == 1.0
+    assert summary["left"]["undefined"] == UNDEFINED
+    assert strict_json(dumps(summary))["left"] == {"precision": None, "recall": None, "f1": None, "notes": 0,
+                                                   "undefined": UNDEFINED}
+    assert strict_json(dumps([np.float32("inf"), np.int64(3), (1.5,)])) == [None, 3, [1.5]]
+    # `dexguitar eval --json` prints it so (the policy and the play itself stand in)
+    monkeypatch.setattr(cli.PO, "load", lambda path: ({}, {"hand": "right"}))
+    monkeypatch.setattr(cli.PO.PolicySpec, "from_meta", staticmethod(lambda meta: SimpleNamespace(kind="policy")))
+    monkeypatch.setattr(cli, "evaluate", lambda params, spec, songs: {"Ode": {"summary": summary, "notes": [row]}})
+    assert main(["eval", "--ckpt", "C", "--song", "ode_to_joy", "--json"]) == 0
+    assert strict_json(capsys.readouterr().out)["Ode"]["left"]["f1"] is None
+    assert main(["eval", "--ckpt", "C", "--song", "ode_to_joy"]) == 0
+    assert "left F1 undefined (0 notes: nothing to press or pick)  right F1 1.000" in capsys.readouterr().out
+
+
+# ------------------------------------------------------------------------------------------------ tracks
+
+def three_tracks(path, bad=None):
+    tracks = [{"tempo": tempo, "title": name, "notes": [{"t": "1/4", "frets": [fret, X, X, X, X, X]}]}
+              for tempo, name, fret in ((90, "lead", 5), (100, "rhythm", 3), (110, "bass", 0))]
+    if bad is not None:
+        tracks[bad]["notes"][0]["frets"] = [0] * 5             # five strings
+    path.write_text(json.dumps(tracks))
+    return path
+
+
+def test_tracks_of_a_multi_track_tab(tmp_path, capsys):
+    bad = three_tracks(tmp_path / "bad.json", bad=1)
+    e = error_of(load_song, bad, kind=SongError)
+    assert e.where == "track 1, note 0" and "'frets' must be 6 integers" in str(e)
+    assert load_song(bad, track=2).notes[0].frets == (0, X, X, X, X, X)          # the user's choice stands
+    differ = three_tracks(tmp_path / "differ.json")
+    assert str(error_of(load_song, differ, kind=SongError)) == (
+        f"{differ}: 3 different tracks (0: 'lead', 90 BPM, 1 note; 1: 'rhythm', 100 BPM, 1 note; 2: 'bass', "
+        f"110 BPM, 1 note): choose one with --track N (0..2)")
+    same = tmp_path / "same.json"
+    same.write_text(json.dumps([json.loads(differ.read_text())[0]] * 2))
+    assert load_song(same).tempo == 90                                           # copies of one song: read
+    assert main(["song", "info", str(differ), "--track", "1", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["tempo"] == 100
+    (tmp_path / "one.txt").write_text(SYSTEM)
+    assert load_song(tmp_path / "one.txt", track=0).n_notes == 1
+    assert str(error_of(lambda p: load_song(p, track=1), tmp_path / "one.txt", kind=SongError)) == \
+        f"{tmp_path / 'one.txt'}: track 1 does not exist: a .txt file holds one track (0)"
+    assert load_song("ode_to_joy", track=0) == load_song("ode_to_joy")
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["song", "info", str(differ), "--track", "-1"])
+    assert "tracks are numbered from 0, got -1" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------------------------------------ ASCII tab lines
+
+@pytest.mark.parametrize("extra, message", [
+    ("|--3-|", "line 7, column 1: one string line too many (or one missing): lines 1-7 are 7 consecutive string "
+               "lines, and a system has 6"),
+    ("3---|", "line 7, column 1: this line looks like a string line of tab but its body starts with neither '|' "
+              "nor '-'"),
+    ("  x--3-", "line 7, column 3: this line looks like a string line of tab but its body starts with neither"),
+    ("h|-3--|", "line 7, column 1: this line looks like a string line of tab but 'h' is not a string name"),
+    ("|-3 --|", "line 7, column 1: this line looks like a string line of tab but its body has a blank in it"),
+])
+def test_an_extra_tab_line_is_refused_with_its_number(tmp_path, extra, message):
+    path = tmp_path / "seven.txt"
+    path.write_text(SYSTEM + extra + "\n")
+    assert f"seven.txt:{message}" in str(error_of(load_song, path, kind=SongError))
+
+
+def test_text_lines_beside_a_system_are_still_text():
+    # a dashed separator, a repeat count, a chord chart, lyrics with a hyphen, a time: none is a string line
+    text = "-------\n" + SYSTEM + "x2\n| C | G |\nA-men\n3:45 -- fine\n1-2-3-4\n"
+    assert parse_ascii_tab(text).n_notes == 1
+
+
+# ------------------------------------------------------------------------------------------------ --size, --envs
+
+@pytest.mark.parametrize("size, message", [
+    ("0x0", "0x0 is outside 16..7680 x 16..4320"), ("99999x99999", "99999x99999 is outside 16..7680 x 16..4320"),
+    ("641x360", "641x360: width and height must be even"), ("wide", "expected WIDTHxHEIGHT, e.g. 1280x720"),
+])
+def test_video_sizes_out_of_range_are_refused(size, message, capsys):
+    with pytest.raises(SystemExit) as info:
+        build_parser().parse_args(["play", "--song", "s", "--size", size])
+    assert info.value.code == 2 and f"argument --size: {message}" in capsys.readouterr().err
+    args = build_parser().parse_args(["play", "--song", "s", "--size", "7680x4320"])
+    assert args.size == (7680, 4320)
+    assert build_parser().parse_args(["play", "--song", "s"]).size == (1280, 720)
+
+
+@struct.dataclass
+class _Body:
+    link_hist: jax.ShapeDtypeStruct
+
+
+@struct.dataclass
+class _EnvState:
+    obs: jax.ShapeDtypeStruct
+    privileged: jax.ShapeDtypeStruct
+    body: _Body
+    rest: jax.ShapeDtypeStruct
+
+
+@struct.dataclass
+class _TrainState:
+    env: _EnvState
+    params: jax.ShapeDtypeStruct
+
+
+def test_env_counts_that_cannot_fit_are_refused():
+    f32 = lambda *shape: jax.ShapeDtypeStruct(shape, np.float32)          # noqa: E731
+    # 4 envs, each state 1000 float32 = 4000 B, of which obs 100 + privileged 10 + link history 50 floats = 640 B;
+    # a horizon of 8: per env 2 x 4000 + 8 x 640 = 13120 B; besides the envs 1000 float32 of parameters = 4000 B
+    shapes = _TrainState(_EnvState(f32(4, 100), f32(4, 10), _Body(f32(4, 50)), f32(4, 840)), f32(1000))
+    trainer = SimpleNamespace(config=SimpleNamespace(num_envs=4, horizon=8), state_shapes=shapes)
+    assert M.tree_bytes(shapes.env) == 4 * 4000
+    assert M.training_bytes(trainer) == (13120, 4000)
+    env = SimpleNamespace(reset=lambda key: {"qpos": jnp.zeros((27,), jnp.float32), "t": jnp.int32(0)})
+    assert M.env_bytes(env) == 27 * 4 + 4
+    gib = 2**30
+    M.check_envs(4, 13120, 4000, free=(gib, "here"))                                  # 56 KB: fine
+    M.check_envs(16_384, 130 * 1024, 70 * 2**20, free=(60 * gib, "1 H100"))           # 2.1 GB of 60 GB: fine
+    with pytest.raises(UserError) as info:
+        M.check_envs(100_000_000, 13120, 4000, free=(4 * gib, "this machine"))
+    # 1e8 x 13120 B + 4000 B = 1.312e12 B = 1221.9 GiB; (4 GiB - 4000 B) // 13120 B = 327,360 envs
+    assert str(info.value) == ("--envs 100,000,000: needs at least 1,221.9 GiB (13 KiB per env and 0.0 MiB "
+                               "besides), but this machine has 4.0 GiB free; at most about 327,360 envs fit")
+    have, where = M.free_memory()                   # this machine (tests run on a CPU): a positive number of bytes
+    assert have > 0 and where == "this machine"
+
+
+def test_train_and_bench_refuse_env_counts_before_allocating(tmp_path, monkeypatch, capsys):
+    # stand-ins whose env state is 1e6 B; bench holds two per env (a step's input and output), so 1e8 envs need
+    # 2e14 B = 186,264.5 GiB, past any machine
+    f32 = lambda *shape: jax.ShapeDtypeStruct(shape, np.float32)          # noqa: E731
+    monkeypatch.setattr(cli, "default_songs", lambda hand: None)
+    monkeypatch.setattr(cli.E, "make", lambda hand, songs: SimpleNamespace(
+        reset=lambda key: jnp.zeros((250_000,), jnp.float32)))
+    monkeypatch.setattr(cli, "bench_env", lambda *a, **k: pytest.fail("bench ran"))
+    assert main(["bench", "env", "--envs", "4", "100000000"]) == 2
+    assert re.fullmatch(r"error: --envs 100,000,000: needs at least 186,264\.5 GiB \(1,953 KiB per env\), but this "
+                        r"machine has [\d,.]+ [MG]iB free; at most about [\d,]+ envs fit\n", capsys.readouterr().err)
+    n = 100_000_000
+
+    class Trainer:
+        def __init__(self, config, *args):
+            self.config = config
+            self.state_shapes = _TrainState(_EnvState(f32(n, 250_000), f32(n, 1), _Body(f32(n, 1)), f32(n, 1)),
+                                            f32(1))
+    monkeypatch.setattr(cli, "Trainer", Trainer)
+    monkeypatch.setattr(cli, "reference_frames", lambda motion: None)
+    monkeypatch.setattr(cli, "train", lambda *a, **k: pytest.fail("training started"))
+    assert main(["train", "--hand", "left", "--envs", str(n), "--song", "ode_to_joy", "--out",
+                 str(tmp_path / "run")]) == 2
+    assert "error: --envs 100,000,000: needs at least" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------------------------------------ raw bytes
+
+def test_error_messages_escape_unprintable_characters(tmp_path, capsys):
+    path = tmp_path / "nul.txt"
+    path.write_bytes(b"title: a\x00b\ntempo: 9\x0700\n" + SYSTEM.encode())
+    assert main(["song", "info", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err == f"error: {path}:line 2, column 8: malformed tempo '9\\x0700': expected a positive number of " \
+                  "quarter-note beats per minute, e.g. 'tempo: 100'\n"
+    assert printable("a\x00b\nc\u200bé") == "a\\x00b\\nc\\u200bé"

@@ -136,5 +136,5 @@ def test_load_songs_errors(tmp_path):
     (empty / "readme.md").write_text("")
     with pytest.raises(SongError) as info:
         load_songs([empty])
-    assert str(info.value) == (f"{empty}: no tab files (.json, .txt, .tab, .gp3, .gp4, .gp5, .mid, .midi) "
+    assert str(info.value) == (f"{empty}: no tab files (.json, .txt, .tab, .gp3, .gp4, .gp5, .mid, .midi, .musicxml, .mxl) "
                                f"in this folder")

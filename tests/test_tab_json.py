@@ -8,7 +8,8 @@ from dexguitar.music.song import MUTE, Effect, Song, SongError, make_note
 from dexguitar.music.tab_json import read_json_tab, write_json_tab
 
 OFFICIAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "official" / "notes"
-needs_official = pytest.mark.skipif(not OFFICIAL.is_dir(), reason="shared official tab files not available")
+needs_official = pytest.mark.skipif(not OFFICIAL.is_dir(), reason="the authors' official tabs are not here: "
+                                   "../shared/data/official/notes/ beside the clone")
 OFFICIAL_NAMES = ["beethoven_virus", "canon_in_d_major1", "canon_in_d_major2", "capriccio_op59_no16",
                   "come_as_you_are", "dont_cry", "flight_of_the_bumblebee1", "johnny_b_goodie",
                   "prelude1_in_c_major_chords", "snow", "sonata_in_f_major_ms84_no14", "spring_overture",

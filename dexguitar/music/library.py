@@ -35,7 +35,8 @@ def _load(name: str) -> Song:
 
 
 def load_song(source: str | Path, **options) -> Song:
-    """A tab file of any supported format (the reader is chosen by the suffix), or an embedded song by name."""
+    """A tab file of any supported format (the reader is chosen by the suffix), or an embedded song by name.
+    `options` go to `readers.read_tab` (`track`, or a reader's own)."""
     source = Path(source)
     if not source.exists():
         if str(source) in names():
@@ -44,9 +45,10 @@ def load_song(source: str | Path, **options) -> Song:
     return read_tab(source, **options)
 
 
-def load_songs(sources) -> list[Song]:
+def load_songs(sources, **options) -> list[Song]:
     """The songs of every source, in order, so that one argument list can name a whole collection. A source is a tab
-    file, an embedded song name or a folder: all the files in it that `READERS` can read, sorted by name."""
+    file, an embedded song name or a folder: all the regular files in it that `READERS` can read, sorted by name.
+    `options` (e.g. `track`) apply to every file."""
     songs = []
     for source in sources:
         p = Path(source)
@@ -54,18 +56,18 @@ def load_songs(sources) -> list[Song]:
             files = sorted(f for f in p.iterdir() if f.is_file() and f.suffix.lower() in READERS)
             if not files:
                 raise SongError(p, None, f"no tab files ({', '.join(READERS)}) in this folder")
-            songs += [load_song(f) for f in files]
-        elif p.is_file() or str(source) in names():
-            songs.append(load_song(p))
+            songs += [load_song(f, **options) for f in files]
+        elif p.exists() or str(source) in names():     # a FIFO or device too: `read_tab` says what it is
+            songs.append(load_song(p, **options))
         else:
             raise SongError(p, None, "no such file, folder or embedded song")
     return songs
 
 
 def load(name: str, **options) -> Song:
-    """Parse an embedded song; `options` (tempo, grid, title) are passed to `read_ascii_tab`."""
+    """Parse an embedded song; `options` (tempo, grid, title, track) are passed to `readers.read_tab`."""
     if options:
-        return read_ascii_tab(path(name), **options)
+        return read_tab(path(name), **options)
     return _load(name)
 
 

@@ -15,7 +15,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Sequence
 
-from dexguitar.errors import InputError, read_input
+from dexguitar.errors import InputError, read_input, special_file
 from dexguitar.world.guitar import N_FRETS, N_STRINGS, open_pitches
 
 MUTE = -1  # string not played during the note
@@ -29,10 +29,28 @@ class SongError(InputError):
     """Bad input in a tab file: the message names the file, the position in it and what was expected."""
 
 
+def check_file(path: str | Path, what: str = "a tab file") -> None:
+    """`SongError` when `path` is a special file (FIFO, device, socket) or a directory, before anything opens it."""
+    kind = special_file(path)
+    if kind is not None:
+        raise SongError(path, None, f"is {kind}, not {what}")
+
+
 def read_bytes(path: Path, limit: int = MAX_FILE_BYTES) -> bytes:
-    """The bytes of a tab file; `SongError` if it is missing, unreadable or larger than `limit` (each reader says
-    what an empty file is not)."""
+    """The bytes of a tab file; `SongError` if it is missing, a special file (`check_file`), unreadable or larger
+    than `limit` (each reader says what an empty file is not)."""
+    check_file(path)
     return read_input(path, "a tab file", SongError, limit, " (real tabs are tens of KB)", empty_ok=True)
+
+
+def check_playable(song: "Song", path: str | Path | None = None, where: str | None = None) -> "Song":
+    """`song`, or `SongError` when it has nothing to play: every note a rest (all six strings muted). The one rule
+    for every format; `readers.read_tab` applies it to what each reader returns."""
+    if song.n_notes == 0:
+        n = len(song.notes)
+        rests = "its one note is a rest" if n == 1 else f"all {n} notes are rests"
+        raise SongError(path, where, f"nothing to play: {rests} (every string muted)")
+    return song
 
 
 class Effect(enum.IntFlag):

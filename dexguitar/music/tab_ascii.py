@@ -15,11 +15,13 @@ Systems
         B|----1---|--------|        |----1---|        ----1---
         ...                         ...               ...
 
-    More than six consecutive string lines are read six by six (systems written back to back). Everything
-    else in the file -- titles, chord names, lyrics, blank lines, ``[Verse]`` marks, a line of dashes -- is
-    skipped; the systems are concatenated in time as if they were one long line. A string line may carry a
-    trailing comment after its final bar line and a blank (``|--0--|  x2``); it is ignored (repeats are not
-    expanded).
+    Six, twelve, ... consecutive string lines are read six by six (systems written back to back); any other
+    count is an error naming the first line past the last whole system. A line that is no string line but holds
+    only tab characters with frets or ``x`` and dashes or bar lines (``3---|``, ``h|--3--|``, ``|--3 --|``) is
+    an error too. Everything else in the file -- titles, chord names, lyrics, blank lines, ``[Verse]`` marks, a
+    line of dashes -- is skipped; the systems are concatenated in time as if they were one long line. A string
+    line may carry a trailing comment after its final bar line and a blank (``|--0--|  x2``); it is ignored
+    (repeats are not expanded).
 
 Rhythm: every column is one grid unit
     Inside a system every character column except bar-line columns (``|``, and ``:`` of ``|:`` / ``:|`` repeat
@@ -121,6 +123,10 @@ _EXPECTED_CHARS = ("frets 0-22, '-', '|', 'x' (mute), h/p (hammer-on/pull-off), 
 _STRING_LINE = re.compile(
     r"^(?P<indent>[ ]*)(?:(?P<label>[A-Ga-g][#b]?\d?)[ ]*)?(?P<body>[|\-]\S*?)(?:(?<=\|)[ ]+\S.*)?[ ]*$")
 _WORD = re.compile(r"[A-Za-z]{2,}")
+# A line that is no string line but holds only tab characters, with a run of dashes or a bar line and a fret or mute
+# ("3---|", "h|--3--|", "|--3-- --|"): a string line written wrong, refused rather than skipped as text.
+_TAB_CHARS = frozenset("0123456789-|:xX~hpsHPS/\\()")
+_LOOSE_LABEL = re.compile(r"^\s*(?P<label>[A-WYZa-wyz][#b]?\d?(?=[\s|\-(\d]))?")
 _HEADER = re.compile(r"^\s*(?P<key>title|tempo|bpm|grid|chords|chord)\b\s*(?P<sep>[:=])?\s*(?P<value>.*)$",
                      re.IGNORECASE)  # lines are stripped on the right: the value ends with the line
 _TEMPO_VALUE = re.compile(r"^(\d+(?:\.\d*)?|\.\d+)\s*(?:bpm)?$", re.IGNORECASE)
@@ -235,6 +241,12 @@ class _Parser:
                 return
             if len(run) % N_STRINGS:
                 first = run[0]
+                if len(run) > N_STRINGS:       # blame the first line past the last whole system
+                    extra = run[len(run) // N_STRINGS * N_STRINGS]
+                    raise self.error(extra.lineno, extra.start + 1,
+                                     f"one string line too many (or one missing): lines {first.lineno}-"
+                                     f"{run[-1].lineno} are {len(run)} consecutive string lines, and a system has "
+                                     f"{N_STRINGS} (string 1 = high E on top; separate systems by a blank line)")
                 raise self.error(first.lineno, first.start + 1,
                                  f"a system needs {N_STRINGS} string lines (string 1 = high E on top), found "
                                  f"{len(run)} consecutive string line(s) on lines {first.lineno}-{run[-1].lineno}")
@@ -247,11 +259,30 @@ class _Parser:
         for index, line in enumerate(self.lines):
             s = self._string_line(index + 1, line)
             if s is None:
+                self._check_not_tab(index + 1, line)
                 close_run()
             else:
                 run.append(s)
         close_run()
         return systems, system_at
+
+    def _check_not_tab(self, lineno: int, line: str) -> None:
+        """Refuse a line that is no string line but looks like one (see `_TAB_CHARS`)."""
+        label = _LOOSE_LABEL.match(line)
+        rest = line[label.end():]
+        chars = set(rest) - {" "}
+        if not (chars and chars <= _TAB_CHARS and ("--" in rest or "|" in rest) and chars & set("0123456789xX")):
+            return
+        col = len(line) - len(line.lstrip()) + 1
+        if label.group("label") is not None and not re.fullmatch(r"[A-Ga-g][#b]?\d?", label.group("label")):
+            why = f"'{label.group('label')}' is not a string name (e B G D A E)"
+        elif re.search(r"\S\s+\S", rest.strip()):
+            why = "its body has a blank in it"
+        else:
+            why = "its body starts with neither '|' nor '-'"
+        raise self.error(lineno, col, f"this line looks like a string line of tab but {why}: a string line is an "
+                                      "optional label (e B G D A E) and a body that starts with '|' or '-' and has "
+                                      "no blanks (a comment may follow its final '|' after a blank)")
 
     # ---------------------------------------------------------------- pass 2: headers and chord lines
 
@@ -518,7 +549,7 @@ class _Parser:
                 g += 1
                 i += 1
                 continue
-            fail(i, f"unknown character '{c}' in a string line; expected {_EXPECTED_CHARS}")
+            fail(i, f"unknown character {c!r} in a string line; expected {_EXPECTED_CHARS}")
         if pending is not None:
             ch, at = pending
             fail(at, f"{_CONNECTOR_NAMES[ch]} needs a fret right after it on the same string")

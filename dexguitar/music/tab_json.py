@@ -18,6 +18,9 @@ A file holds a list of tracks; a track is `{"tempo": BPM, "notes": [note, ...]}`
 Extension: a track may carry `"title"`; the writer always writes it so that titles survive a round trip; without
 it the reader uses the file name (without suffix) as the title.
 
+Tracks: `track` picks one (0-based). Without it a file of one track is read; a file of several has all of them
+read (a bad track is refused, naming it) and is refused, listing its tracks, unless they hold the same song.
+
 Reading: the file may start with a UTF-8 byte-order mark; it is refused when larger than `song.MAX_FILE_BYTES`, and
 the song must keep the limits of `timing` (tempo, shortest note, length).
 
@@ -174,8 +177,10 @@ def _parse_note(raw, last_fret) -> Note:
     return Note(duration, frets, tuple(effects), chord)
 
 
-def read_json_tab(path: str | Path, *, track: int = 0) -> Song:
-    """Read one track (index `track`, 0-based) of an authors' JSON tab file into a `Song`.
+def read_json_tab(path: str | Path, *, track: int | None = None) -> Song:
+    """Read one track (index `track`, 0-based) of an authors' JSON tab file into a `Song`. Without `track`, a file
+    of several tracks has every track read (a bad one is refused, naming it) and is refused, listing them, unless
+    they all hold the same song: which track to play is the user's choice, not the first one's by default.
 
     Errors raise `SongError` naming the file and the position ("line L, column C" for invalid JSON,
     "track T, note N" with 0-based indices for bad content).
@@ -201,6 +206,14 @@ def read_json_tab(path: str | Path, *, track: int = 0) -> Song:
         raise SongError(path, None, f"expected a list of tracks, got {type(data).__name__}")
     if not data:
         raise SongError(path, None, "the file holds no tracks")
+    if track is None:
+        songs = [_parse_track(t, path, i) for i, t in enumerate(data)]
+        if any((s.tempo, s.notes) != (songs[0].tempo, songs[0].notes) for s in songs[1:]):
+            listed = "; ".join(f"{i}: '{s.title}', {s.tempo:g} BPM, {len(s.notes)} note{'s' * (len(s.notes) != 1)}"
+                               for i, s in enumerate(songs[:8])) + ("; ..." if len(songs) > 8 else "")
+            raise SongError(path, None, f"{len(songs)} different tracks ({listed}): choose one with --track N "
+                                        f"(0..{len(songs) - 1})")
+        return songs[0]
     if not _is_int(track) or not 0 <= track < len(data):
         raise SongError(path, None, f"track {track!r} does not exist; the file has {len(data)} track(s) "
                                     f"(0..{len(data) - 1})")
