@@ -13,7 +13,8 @@ CONFIG_SYNC ?= experiments/sync_hold.py
 LEFT ?= models/policies/left_general
 RIGHT ?= models/policies/right_mixed
 OUT ?= runs
-JOBS ?= 2                      # test processes (compilation is single-threaded: one per core)
+# test processes (compilation is single-threaded: one per core)
+JOBS ?= 2
 
 $(STAMP): pyproject.toml
 	$(PY) -m venv $(VENV)
@@ -35,7 +36,7 @@ demo: $(STAMP)                 ## the main job: the shipped synchronized policie
 	$(BIN)/dexguitar play --ckpt models/policies/sync_strum_g_c_d --song strum_g_c_d --out out/demo --caption
 
 test: $(STAMP)                 ## the CPU test suite
-	JAX_PLATFORMS=cpu $(BIN)/python -m pytest -n $(JOBS) --dist loadfile
+	JAX_PLATFORMS=cpu $(BIN)/python -m pytest -n $(JOBS) --dist loadfile -rs
 
 check: $(STAMP)                ## every scene steps in MJX (4 envs, jit + vmap)
 	$(BIN)/dexguitar check

@@ -24,9 +24,11 @@ from pathlib import Path
 
 import jax
 
-from dexguitar.envs.bench import bench_env, check_scenes
+from dexguitar import envs as E
+from dexguitar.envs.bench import bench_env, check_scenes, default_songs
 from dexguitar.errors import UserError
 from dexguitar.learn.executable import in_flight
+from dexguitar.learn.memory import check_envs, env_bytes, training_bytes
 from dexguitar.learn import policy as PO
 from dexguitar.learn.run import (check_init, check_out, compilation_cache, load_config, recorded_config, train,
                                  xla_flags)
@@ -40,7 +42,7 @@ from dexguitar.music import timeline as TL
 from dexguitar.music.tab_json import write_json_tab
 from dexguitar.perform import pipeline, plots
 from dexguitar.perform import play as PL
-from dexguitar.perform.evaluate import evaluate, evaluate_synchronizer
+from dexguitar.perform.evaluate import dumps, evaluate, evaluate_synchronizer
 
 POLICIES = Path(__file__).resolve().parents[1] / "models" / "policies"
 
@@ -57,6 +59,30 @@ def positive_float(text: str) -> float:
     if not value > 0:
         raise argparse.ArgumentTypeError(f"must be positive, got {text}")
     return value
+
+
+def track_index(text: str) -> int:
+    value = int(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"tracks are numbered from 0, got {value}")
+    return value
+
+
+VIDEO_SIZES = ((16, 7680), (16, 4320))    # width, height: 16 px up to 8K UHD
+
+
+def video_size(text: str) -> tuple[int, int]:
+    """WIDTHxHEIGHT within VIDEO_SIZES, both even (H.264 video halves the colour planes)."""
+    try:
+        width, height = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, e.g. 1280x720, got {text!r}") from None
+    (w0, w1), (h0, h1) = VIDEO_SIZES
+    if not (w0 <= width <= w1 and h0 <= height <= h1):
+        raise argparse.ArgumentTypeError(f"{width}x{height} is outside {w0}..{w1} x {h0}..{h1}")
+    if width % 2 or height % 2:
+        raise argparse.ArgumentTypeError(f"{width}x{height}: width and height must be even")
+    return width, height
 
 
 def minutes_or_zero(text: str) -> float:
@@ -77,7 +103,8 @@ def song_summary(song) -> dict:
 
 
 def _song_info(args) -> int:
-    rows = [{"file": str(source), **song_summary(load_song(source))} for source in args.files]
+    track = getattr(args, "track", None)
+    rows = [{"file": str(source), **song_summary(load_song(source, track=track))} for source in args.files]
     if args.json:
         print(json.dumps(rows[0] if len(rows) == 1 else rows, indent=2))
         return 0
@@ -95,7 +122,7 @@ def _song_list(args) -> int:
 
 
 def _song_convert(args) -> int:
-    song = load_song(args.source)
+    song = load_song(args.source, track=args.track)
     write_json_tab(song, args.out)
     print(f"wrote {args.out}: {song.n_notes} notes, {song.n_chords} chords, {song.seconds:.1f} s")
     return 0
@@ -118,6 +145,8 @@ def _check(args) -> int:
 
 def _bench_env(args) -> int:
     rows = []
+    for hand in args.hand:                         # refused before any env is made, not once memory runs out
+        check_envs(max(args.envs), 2 * env_bytes(E.make(hand, default_songs(hand))))
     for hand in args.hand:
         for n in args.envs:
             for bare in ((False, True) if args.bare else (False,)):
@@ -137,7 +166,7 @@ def _bench_env(args) -> int:
 def _material(args, hand: str):
     """The songs named by --song (files, embedded names, folders), or procedural material when none is named."""
     if args.song:
-        return library.load_songs(args.song)
+        return library.load_songs(args.song, track=args.track)
     return procedural.material(hand, args.style, 0, args.procedural)
 
 
@@ -151,14 +180,16 @@ def _train(args) -> int:
         residual = bool(env_cfg and (env_cfg.feedforward or env_cfg.right_feedforward))
         check_init(args.init_from, cfg.hand, residual, cfg.action_scale)            # before building anything
     trainer = Trainer(cfg, [TL.from_song(s) for s in songs], reference_frames(motion), env_cfg)
-    print(f"training the {cfg.hand} hand on {len(songs)} song(s) with {cfg.num_envs} envs x {cfg.horizon} steps "
-          f"({cfg.batch} samples per iteration) on {jax.devices()[0].device_kind}; reference motion "
-          f"{motion.name} ({motion.qpos.shape[0] / motion.fps:.1f} s); writing {args.out}", file=sys.stderr)
+    check_envs(cfg.num_envs, *training_bytes(trainer), devices=args.devices)
+    print(f"training the {cfg.hand} hand on {len(songs)} song{'s' * (len(songs) != 1)} with {cfg.num_envs} envs x "
+          f"{cfg.horizon} steps ({cfg.batch} samples per iteration) on {jax.devices()[0].device_kind}; "
+          f"reference motion {motion.name} ({motion.qpos.shape[0] / motion.fps:.1f} s); writing {args.out}",
+          file=sys.stderr)
     summary = train(trainer, args.out, iterations=cfg.iterations, resume=args.resume,
                     meta={"songs": [s.title for s in songs], "motion": motion.name},
                     stop_after_calls=args.stop_after_calls, max_minutes=args.max_minutes, init_from=args.init_from,
                     devices=args.devices)
-    print(json.dumps(summary))
+    print(dumps(summary))
     return 0
 
 
@@ -176,6 +207,7 @@ def _sync(args) -> int:
     recorded = json.loads((out / "config.json").read_text()) if args.resume and (out / "config.json").exists() else {}
     left, right = left or recorded.get("left"), right or recorded.get("right")
     song_files = song_files or recorded.get("song_files")
+    track = args.track if args.track is not None else recorded.get("track")
     if not (left or right) and not args.resume:        # GSync: the general pair (issue 11)
         left, right = _general_pair("sync")
     if not (left and right):
@@ -191,24 +223,26 @@ def _sync(args) -> int:
     else:
         cfg, env_cfg = load_config(args.config, **overrides)
     check_out(out, args.resume)
-    songs = [load_song(s) for s in song_files]
+    songs = [load_song(s, track=track) for s in song_files]
     pair = PO.load_pair(left, right)
     motion = load_motion(args.motion or "left")
     trainer = SyncTrainer(cfg, [TL.from_song(s) for s in songs], reference_frames(motion), *pair, env_cfg)
+    check_envs(cfg.num_envs, *training_bytes(trainer), devices=args.devices)
     print(f"synchronizing {left} + {right} on {', '.join(s.title for s in songs)} with {cfg.num_envs} envs x "
           f"{cfg.horizon} steps ({cfg.batch} samples per iteration) on {jax.devices()[0].device_kind}; "
           f"writing {out}", file=sys.stderr)
     summary = train(trainer, out, iterations=cfg.iterations, resume=args.resume,
                     meta={"songs": [s.title for s in songs], "motion": motion.name, "left": str(left),
-                          "right": str(right), "song_files": [_song_source(s) for s in song_files]},
+                          "right": str(right), "song_files": [_song_source(s) for s in song_files],
+                          **({"track": track} if track is not None else {})},
                     stop_after_calls=args.stop_after_calls, max_minutes=args.max_minutes, devices=args.devices)
-    print(json.dumps(summary), file=sys.stderr)
+    print(dumps(summary), file=sys.stderr)
     if args.no_eval:
         return 0
     params, meta = PO.load(out)
     staged = evaluate_synchronizer(params, PO.PolicySpec.from_meta(meta), songs)
-    (out / "eval.json").write_text(json.dumps({stage: {k: v["summary"] for k, v in r.items()}
-                                               for stage, r in staged.items()}, indent=2))
+    (out / "eval.json").write_text(dumps({stage: {k: v["summary"] for k, v in r.items()}
+                                          for stage, r in staged.items()}, indent=2))
     for stage, results in staged.items():
         _print_results(results, f"[{stage} synchronization] ")
     return 0
@@ -236,6 +270,7 @@ def _print_results(results: dict, label: str = "") -> None:
         s = res["summary"]
         hands = [h for h in ("left", "right", "both") if h in s]
         print(f"{label}{title}: " + "  ".join(
+            f"{h} F1 undefined (0 notes: nothing to press or pick)" if s[h]["notes"] == 0 else
             f"{h} F1 {s[h]['f1']:.3f} (P {s[h]['precision']:.3f} R {s[h]['recall']:.3f}, {s[h]['notes']} notes)"
             for h in hands))
         for chord, f1 in sorted(s["chords"].items(), key=lambda kv: kv[1]):
@@ -251,7 +286,7 @@ def _eval(args) -> int:
     else:
         params, spec = PL.pair(args.left, args.right)
         meta = spec.to_meta()
-    songs = library.load_songs(args.song) if args.song else []
+    songs = library.load_songs(args.song, track=args.track) if args.song else []
     if args.procedural:
         songs += procedural.material(meta["hand"], args.style, args.seed, args.procedural)
     if not songs:
@@ -260,14 +295,14 @@ def _eval(args) -> int:
     if spec.kind == "synchronizer" and args.ckpt:   # before and after synchronization
         staged = evaluate_synchronizer(params, spec, songs)
         if args.json:
-            print(json.dumps({stage: keep(r) for stage, r in staged.items()}, indent=2))
+            print(dumps({stage: keep(r) for stage, r in staged.items()}, indent=2))
             return 0
         for stage, results in staged.items():
             _print_results(results, f"[{stage} synchronization] ")
         return 0
     results = evaluate(params, spec, songs)
     if args.json:
-        print(json.dumps(keep(results), indent=2))
+        print(dumps(keep(results), indent=2))
         return 0
     _print_results(results)
     return 0
@@ -309,15 +344,13 @@ def _play(args) -> int:
         params = PO.unsynchronized(params) if args.unsynchronized else params
     else:
         params, spec = PL.pair(args.left, args.right)
-    try:
-        width, height = (int(v) for v in args.size.lower().split("x"))
-    except ValueError:
-        raise UserError(f"--size {args.size}: expected WIDTHxHEIGHT, e.g. 1280x720") from None
-    report = PL.perform(args.song, params, spec, args.out, seconds=args.seconds, video=not args.frames_only,
+    width, height = args.size
+    song = args.song if args.track is None else load_song(args.song, track=args.track)
+    report = PL.perform(song, params, spec, args.out, seconds=args.seconds, video=not args.frames_only,
                         video_fps=args.fps, width=width, height=height, camera=args.camera, captions=args.caption,
-                        quiet=args.json)
+                        quiet=args.json, motion=args.motion)
     if args.json:
-        print(json.dumps(report, indent=1))
+        print(dumps(report, indent=1))
     return 0
 
 
@@ -354,6 +387,12 @@ def _add_run_args(p: argparse.ArgumentParser, out_help: str) -> None:
     p.add_argument("--process-id", type=int)
 
 
+TRACK_HELP = ("which track of a multi-track tab to read, from 0 (JSON, Guitar Pro, MIDI, MusicXML; an ASCII tab "
+              "holds track 0 alone). Without it a JSON tab of several different tracks is refused, naming them; "
+              "Guitar Pro takes the first 6-string guitar track in standard tuning, MIDI merges all tracks and "
+              "MusicXML takes the first tab staff")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="dexguitar", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -363,6 +402,7 @@ def build_parser() -> argparse.ArgumentParser:
                                                                                        required=True)
     p = song.add_parser("info", help="tempo, notes, chords, duration, frets of tab files or embedded songs")
     p.add_argument("files", nargs="+", help="tab files (.json .txt .tab .gp3/4/5 .mid) or embedded song names")
+    p.add_argument("--track", type=track_index, help=TRACK_HELP)
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_song_info)
     p = song.add_parser("list", help="the embedded songs")
@@ -371,6 +411,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = song.add_parser("convert", help="convert any tab to the authors' JSON tab format")
     p.add_argument("source")
     p.add_argument("out", help="the .json file to write")
+    p.add_argument("--track", type=track_index, help=TRACK_HELP)
     p.set_defaults(func=_song_convert)
 
     bench = sub.add_parser("bench", help="throughput benchmarks").add_subparsers(dest="bench_command",
@@ -386,6 +427,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("train", help="train one hand (PPO + imitation); resumable")
     p.add_argument("--hand", choices=["left", "right"], default=None)
     p.add_argument("--song", nargs="+", help="tab files, embedded song names or folders (none: procedural)")
+    p.add_argument("--track", type=track_index, help=TRACK_HELP)
     p.add_argument("--procedural", type=positive, help="procedural songs when no --song is given (default: the "
                                                        "style's: 2000 general, 64 others)")
     p.add_argument("--style", choices=["general", "exercises", "steady", "paper", "mixed"],
@@ -401,6 +443,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("sync", help="synchronize a frozen left and right policy on songs (Sec. 4); resumable")
     p.add_argument("--song", nargs="+", help="tab files or embedded song names (taken from --out on --resume)")
+    p.add_argument("--track", type=track_index, help=TRACK_HELP + " (taken from --out on --resume)")
     p.add_argument("--left", help="exported left-hand policy or run directory (taken from --out on --resume; "
                                   "neither --left nor --right: models/policies/left_general and right_mixed)")
     p.add_argument("--right", help="exported right-hand policy or run directory (taken from --out on --resume)")
@@ -440,6 +483,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--left", help="with --right: a left and a right policy playing together, unsynchronized")
     p.add_argument("--right")
     p.add_argument("--song", nargs="+")
+    p.add_argument("--track", type=track_index, help=TRACK_HELP)
     p.add_argument("--procedural", type=int, default=0, help="also N procedural songs (a held-out seed)")
     p.add_argument("--seed", type=int, default=1000, help="seed of the procedural songs (training uses 0)")
     p.add_argument("--style", choices=["general", "exercises", "steady", "paper", "mixed"],
@@ -459,14 +503,25 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--right", help="right-hand policy")
     p.add_argument("--unsynchronized", action="store_true", help="with --ckpt: its frozen policies alone")
     p.add_argument("--song", required=True, help="embedded song name or tab file")
-    p.add_argument("--out", default="perf", help="output prefix: OUT.mp4 (or .png), OUT.wav, OUT-report.json")
+    p.add_argument("--track", type=track_index, help=TRACK_HELP)
+    p.add_argument("--out", default="perf",
+                   help="a file name prefix, not a folder: --out out/demo writes out/demo.mp4 (or .png), "
+                        "out/demo.wav and out/demo-report.json, making out/ if needed (default: perf, in the current "
+                        "folder)")
     p.add_argument("--seconds", type=positive_float, help="play only the first seconds")
     p.add_argument("--frames-only", action="store_true", help="a PNG contact sheet instead of the video")
     p.add_argument("--fps", type=positive_float, default=30.0, help="video frame rate (the simulation runs at 60)")
-    p.add_argument("--size", default="1280x720", help="video size WxH")
+    p.add_argument("--size", type=video_size, default=(1280, 720), metavar="WxH",
+                   help="video size, even numbers in 16..7680 x 16..4320 (default 1280x720); the PNG contact sheet "
+                        "(--frames-only, or without imageio-ffmpeg) is 12 frames of 480x270 whatever the size")
     p.add_argument("--camera", default="front", choices=("front", "closeup"),
                    help="front: the whole guitar and both hands; closeup: the fretting hand, following it")
-    p.add_argument("--caption", action="store_true", help="show the song, its tempo and the running F1")
+    p.add_argument("--caption", action="store_true",
+                   help="show the song, its tempo, the running F1 and what the string colours mean")
+    p.add_argument("--motion", action="store_true",
+                   help="also the played motion: OUT-left.npz and OUT-right.npz (each hand's joint values at 60 Hz, "
+                        "the `motion` file format) and OUT.bvh (both hands; metres, y-up: Blender's default BVH "
+                        "import places them as in the simulation)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.set_defaults(func=_play)
 
@@ -500,10 +555,10 @@ def main(argv=None) -> int:
     try:
         return args.func(args)
     except UserError as err:
-        print(f"error: {err}", file=sys.stderr)
+        print(f"error: {printable(str(err))}", file=sys.stderr)
         return leave(2)
     except OSError as err:             # a file or directory that cannot be read or written: the user's to fix
-        print(f"error: {err.filename or ''}: {err.strerror or err}".lstrip(": "), file=sys.stderr)
+        print(printable(f"error: {err.filename or ''}: {err.strerror or err}".lstrip(": ")), file=sys.stderr)
         return leave(2)
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
@@ -513,6 +568,12 @@ def main(argv=None) -> int:
             raise
         traceback.print_exc()
         return leave(1)
+
+
+def printable(text: str) -> str:
+    """`text` on one line with every non-printable character escaped as Python writes it (a NUL byte of a file
+    as \\x00, a newline as \\n), so that no file's bytes reach the terminal raw."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 def _leave(code: int) -> int:

@@ -241,6 +241,9 @@ print(report["title"], f"({report['seconds']:.1f} s):",
       ", ".join(f"{k} {v}" for k, v in report["counts"].items()))
 for hand in ("left", "right", "both"):
     s = report["summary"][hand]
+    if s["f1"] is None:                      # no note concerned this hand (the report's JSON has no NaN)
+        print(f"  {hand:5s} F1 undefined ({s['notes']} notes)")
+        continue
     print(f"  {hand:5s} F1 {s['f1']:.3f}  P {s['precision']:.3f}  R {s['recall']:.3f}  ({s['notes']} notes)")
 wrong = [r for r in report["notes"] if r["verdict"] in ("wrong", "late") and r["note"] >= 0]
 for r in wrong[:10]:

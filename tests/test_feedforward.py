@@ -110,7 +110,8 @@ def test_plans_come_from_the_disk_cache_the_second_time(plans, tmp_path, monkeyp
     FF.attach(TL.stack(plans), version=1)                                # another planner: another plan
     out, err = capsys.readouterr()
     assert len(list(tmp_path.glob("*.npz"))) == 2
-    assert out == "" and err.startswith("planned 1 songs")     # on stderr: `eval --json` prints only JSON
+    assert out == "" and err.startswith("planned the left hand for 1 song (")     # on stderr: `eval --json` prints
+    assert err.rstrip().endswith(" on 1 process")                                # only JSON on stdout
     np.testing.assert_array_equal(np.asarray(first.plan.action), np.asarray(again.plan.action))
     assert first.plan.action.shape[1] >= FF.MIN_FRAMES and int(first.plan.frames[0]) > 0
     assert np.all(np.abs(np.asarray(first.plan.action)) <= 1.0)

@@ -136,7 +136,8 @@ def test_three_hinge_decomposition_matches_mujoco():
     np.testing.assert_allclose(O.euler_xz(to_xyzw(d.xquat[2])), pair, atol=1e-9)
 
 
-@pytest.mark.skipif(not STRUM.exists(), reason="the authors' data is not here")
+@pytest.mark.skipif(not STRUM.exists(), reason="the authors' strum clip is not here: "
+                    "../shared/data/official/motions/strum.json beside the clone")
 def test_official_strum_clip():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -223,8 +223,22 @@ def test_running_f1_and_caption():
     assert notes[94] == 3 and f1[94] == pytest.approx(1 / 3)
     assert notes[-1] == 3 and f1[-1] == pytest.approx(1 / 3)
     text = caption(dataclasses.replace(song, title="Four notes"), notes[64], f1[64]).splitlines()
-    assert text == ["Four notes", "120 bpm", "F1 both hands: 0.500 (2 notes)"]
-    assert caption(song, 0, float("nan")).endswith("F1 both hands: -")
+    assert text == ["Four notes", "120 bpm", "F1 both hands: 0.500 (2 notes)", "yellow: pressed, ready to pick",
+                    "green: picked right", "red: picked wrong"]
+    assert caption(song, 1, 1.0).splitlines()[2] == "F1 both hands: 1.000 (1 note)"
+    assert caption(song, 0, float("nan")).splitlines()[2] == "F1 both hands: -"
+
+
+def test_the_legend_names_the_colours_the_strings_take():
+    """Each colour the legend names is one the strings take, in the situation it names (`string_colors`): string 1
+    pressed at its goal fret 2 and not picked yet, picked once then, and string 2 picked though no target."""
+    goal = press = np.array([2, 0, 0, 0, 0, 0])
+    targets, no = np.array([1, 0, 0, 0, 0, 0], bool), np.zeros(6, bool)
+    picked, ok = C.update_so_far(no, no, np.array([1, 1, 0, 0, 0, 0], bool), goal, targets, press)
+    ready = C.color_names(C.string_colors(goal, targets, press, no, no))[0]
+    right, wrong = C.color_names(C.string_colors(goal, targets, press, picked, ok))[:2]
+    assert C.legend().splitlines() == [f"{ready}: pressed, ready to pick", f"{right}: picked right",
+                                       f"{wrong}: picked wrong"]
 
 
 def perform_hand_made(tmp_path, monkeypatch, **kw):
@@ -286,9 +300,58 @@ def test_video_captions_end_on_the_report(tmp_path, monkeypatch):
     report, T = perform_hand_made(tmp_path, monkeypatch, captions=True, quiet=True)
     both = report["summary"]["both"]
     assert T % 2 == 1 and len(seen["captions"]) == len(seen["q"]) == (T + 1) // 2
-    assert seen["captions"][0].endswith("F1 both hands: -")
-    assert seen["captions"][-1].endswith(f"F1 both hands: {both['f1']:.3f} ({both['notes']} notes)")
+    assert seen["captions"][0].splitlines()[2] == "F1 both hands: -"
+    assert seen["captions"][-1].splitlines()[2] == f"F1 both hands: {both['f1']:.3f} ({both['notes']} notes)"
     assert both["notes"] == 3
+
+
+def test_the_report_json_and_table_give_frets_string_6_first(tmp_path, monkeypatch):
+    """Note 1 of the hand-made song is string 2 at fret 3 (a Song's frets, string 1 first: [x, 3, x, x, x, x]): the
+    written report and its table both give it string 6 first."""
+    import json
+    from pathlib import Path
+
+    from dexguitar.perform import play as P
+    from dexguitar.perform import video as V
+    monkeypatch.setattr(V, "have_ffmpeg", lambda: True)
+    monkeypatch.setattr(V, "render_video", lambda model, q, c, out, **k: Path(out))
+    perform_hand_made(tmp_path, monkeypatch, quiet=True)
+    saved = json.loads((tmp_path / "perf-report.json").read_text())
+    note = next(r for r in saved["notes"] if r["note"] == 1)
+    assert note["frets_6_to_1"] == [-1, -1, -1, -1, 3, -1] and "frets" not in note
+    row = next(line for line in P.format_report(saved).splitlines() if line.split()[0] == "1")
+    assert row.split()[2:8] == ["x", "x", "x", "x", "3", "x"]
+
+
+def test_the_demo_songs_report_counts_its_notes_as_its_f1_does():
+    """The demo's song, counted by hand from its tab (`music/songs/strum_g_c_d.txt`): bars 1-3, 5 and 6 strum
+    D-DU-UDU (6 chords each), bars 4 and 7 two chords and two muted chucks (x-only columns, rests: notes 19, 21,
+    35, 37), bar 8 one held G. 39 notes: 35 chords and 4 rests. Played right (every chord pressed and picked), the
+    header and each hand's F1 count the same 35 notes; the rests are counted apart."""
+    from dexguitar.music import load_song
+    from dexguitar.perform.evaluate import summarize
+    from dexguitar.perform.play import format_report, report_note
+    song = load_song("strum_g_c_d")
+    rows = []
+    for i, note in enumerate(song.notes):
+        pressed, picked = sum(f > 0 for f in note.frets), sum(f >= 0 for f in note.frets)
+        row = {"note": i, "frame": 10 * i, "frets": list(note.frets), "chord": note.is_chord, "rest": note.is_rest,
+               "onset_frame": 10 * i, "verdict": "rest" if note.is_rest else "right", "why": "", "picked": []}
+        for h, n in (("left", pressed), ("right", picked), ("both", picked)):
+            row[h] = {"precision": 1.0, "recall": 1.0, "f1": 1.0, "tp": n, "predicted": n, "targets": n}
+        rows.append(row)
+    summary = summarize(rows, ("left", "right", "both"))
+    assert [summary[h]["notes"] for h in ("left", "right", "both")] == [35, 35, 35]
+    report = {"title": song.title, "seconds": song.seconds, "notes": [report_note(r) for r in rows],
+              "counts": {"right": 35, "late": 0, "wrong": 0, "rest": 4}, "summary": summary}
+    lines = format_report(report).splitlines()
+    assert lines[0] == "Strumming G - C - D: 19.2 s, 35 notes and 4 rests judged"
+    assert sum(line.endswith("(P 1.000 R 1.000, 35 notes)") for line in lines) == 3
+    table = {int(line.split()[0]): line.split()[2:8] for line in lines[2:41]}
+    assert sorted(table) == list(range(39)) and lines[41].startswith("verdicts:")
+    assert [i for i, frets in table.items() if frets == ["x"] * 6] == [19, 21, 35, 37]
+    assert table[0] == ["3", "2", "0", "0", "0", "3"] and table[12] == ["x", "3", "2", "0", "1", "0"]   # G, C
+    assert table[24] == ["x", "x", "0", "2", "3", "2"] and "3 2 0 0 0 3" in summary["chords"]           # D
 
 
 def test_play_options(monkeypatch):
@@ -330,6 +393,22 @@ def test_render_frames_png_colours_strings(tmp_path, duet_model, offscreen_gl):
                             width=64, height=48)
     assert png_size(out) == (128, 48)
     assert (duet_model.geom_matid >= 0).sum() > 0 and duet_model.geom_rgba.shape[1] == 4   # model given back
+
+
+def test_the_legend_is_drawn_below_the_caption(duet_model, offscreen_gl):
+    """The caption's legend lines reach the picture: below the box of the song, tempo and F1, in its left part."""
+    from types import SimpleNamespace
+
+    from dexguitar.perform.play import caption
+    from dexguitar.perform.video import SceneRenderer
+    text = caption(SimpleNamespace(title="Song", tempo=100), 0, float("nan"))
+    q = duet_model.key_qpos[0]
+    with SceneRenderer(duet_model, 320, 180) as r:
+        bare, top, full = r.frame(q), r.frame(q, caption="\n".join(text.splitlines()[:3])), r.frame(q, caption=text)
+    changed = lambda a, b: np.abs(a.astype(int) - b.astype(int)).sum(-1) > 30            # noqa: E731
+    box = np.nonzero(changed(bare, top))[0].max()            # the last line of the three-line caption's box
+    rows, cols = np.nonzero(changed(top, full))
+    assert np.sum(rows > box + 10) > 100 and cols.max() < 240
 
 
 def test_render_video_needs_ffmpeg_or_says_so(tmp_path, duet_model, monkeypatch):

@@ -185,7 +185,8 @@ def test_csv_reader_errors(tmp_path):
         RT.read_markers(tmp_path / "absent.csv")
 
 
-@pytest.mark.skipif(not (MOCAP / "Arpeggio.csv").exists(), reason="the authors' motion capture is not in shared/")
+@pytest.mark.skipif(not (MOCAP / "Arpeggio.csv").exists(), reason="the authors' motion capture is not here: "
+                    "../shared/data/official/mocap/Arpeggio.csv beside the clone")
 def test_arpeggio_first_frames(tmp_path):
     """The first half second of the real capture: the fit error stays at what we measured (experiments/retarget.md:
     6.2 mm left, 3.4 mm right, mean over markers) and the motions load for training."""

@@ -41,8 +41,8 @@ def plan_windows(env: GuitarEnv, keys, workers: int = 0, log=print) -> list[np.n
         jobs.append((notes.left, notes.pick, notes.onset, version, role))
     t0 = time.time()
     plans, workers = in_processes(plan_notes, jobs, workers)
-    log(f"planned {len(plans)} windows ({sum(len(a) for a, _ in plans):,} frames) in {time.time() - t0:.0f} s "
-        f"on {workers} processes")
+    log(f"planned {len(plans)} window{'s' * (len(plans) != 1)} ({sum(len(a) for a, _ in plans):,} frames) in "
+        f"{time.time() - t0:.0f} s on {workers} process{'es' * (workers != 1)}")
     return [action for action, _ in plans]
 
 

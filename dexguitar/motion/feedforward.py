@@ -33,7 +33,7 @@ import jax
 import numpy as np
 from flax import struct
 
-from dexguitar.motion.planner import LATEST, Notes, ScriptedLeft, ScriptedRight, Tracker
+from dexguitar.motion.planner import CONVERGED, LATEST, Notes, ScriptedLeft, ScriptedRight, Tracker
 from dexguitar.world import hands as H
 from dexguitar.world import scene
 
@@ -56,8 +56,12 @@ def cache_dir() -> Path:
 
 def _job_key(left, onset, version: int, hand: str = "left", pick=None, after: int = 0) -> str:
     """A plan's cache key: the left hand's plan depends on the left goals and onsets, the right hand's on the picked
-    strings and onsets, and where it waits for the left hand's plan (`after`: its version), on that plan too."""
-    h = hashlib.sha256(f"v{version}".encode() if hand == "left" else f"right-v{version}-after-{after}".encode())
+    strings and onsets, and where it waits for the left hand's plan (`after`: its version), on that plan too. A left
+    plan from version `CONVERGED` on, and a right one that waits for it, is named so: its IK runs to convergence."""
+    tag = f"v{version}" if hand == "left" else f"right-v{version}-after-{after}"
+    if (version if hand == "left" else after) >= CONVERGED:
+        tag += "-converged"
+    h = hashlib.sha256(tag.encode())
     if hand == "right":
         h.update(np.ascontiguousarray(pick, np.int32).tobytes())
     if hand == "left" or after:
@@ -167,10 +171,12 @@ def _keep(workers: int, pool) -> None:
 
 def in_processes(fn, jobs, workers: int = 0, keep: bool = False) -> tuple[list, int]:
     """([fn(job) for job in jobs], processes used): on `workers` processes (0: one per CPU) with one BLAS thread
-    each, never in this process, even for one job. A plan depends on the BLAS thread count: the 15 official songs
-    planned with 2 threads and with 1 differed in every song, 11 of them by more than 0.04 of a half range in some
-    action (`snow` 0.76). With one thread everywhere a plan is the same on a laptop, in CI and on a 16-core GPU host
-    (where 16 processes of 16 threads each had also run at a load of 150). `fn` must be a module-level function.
+    each, never in this process, even for one job. A left plan of a version before `planner.CONVERGED` depends on the
+    BLAS thread count (its IK stops short of convergence, where rounding decides): the 15 official songs planned with
+    2 threads and with 1 differed in every song, 11 of them by more than 0.04 of a half range in some action (`snow`
+    0.76). One thread everywhere makes such a plan the same for any core count (16 processes of 16 threads each also
+    ran at a load of 150 on a GPU host), though not on every CPU: BLAS kernels differ between CPUs too (`planner._fit`).
+    `fn` must be a module-level function.
     keep: the processes stay for the next call with `keep` (`_KEPT`); only for work whose result does not depend on
     what a worker did before (`_reusable`)."""
     workers = max(1, min(workers or os.cpu_count() or 1, len(jobs)))
@@ -208,8 +214,10 @@ def plan_all(jobs, workers: int = 0, log=None) -> list[tuple[np.ndarray, np.ndar
     log = log or _progress
     t0 = time.time()
     out, used = in_processes(plan_notes, jobs, workers, keep=all(map(_reusable, jobs)))
-    log(f"planned {len(jobs)} songs ({sum(len(a) for a, _ in out):,} frames) in {time.time() - t0:.0f} s "
-        f"on {used} processes")
+    hands = " and ".join(sorted({job[4] if len(job) > 4 else "left" for job in jobs}))
+    songs = f"{len(jobs)} song{'s' * (len(jobs) != 1)}"
+    log(f"planned the {hands} hand for {songs} ({sum(len(a) for a, _ in out):,} frames) in {time.time() - t0:.0f} s "
+        f"on {used} process{'es' * (used != 1)}")
     return out
 
 

@@ -7,7 +7,8 @@
   of the note, or picked a second time;
 - grey (the strings' metal) otherwise.
 The "so far" state is per note: it resets when the next note starts, like the env's per-note bookkeeping.
-`string_colors` is the pure rule for one step; `rollout_colors` applies it to a whole recorded performance.
+`string_colors` is the pure rule for one step; `rollout_colors` applies it to a whole recorded performance; `legend`
+names the colours in the video's caption.
 """
 from __future__ import annotations
 
@@ -18,6 +19,8 @@ GREY = np.array([0.8, 0.8, 0.78, 1.0], np.float32)      # the scene's "metal" ma
 YELLOW = np.array([1.0, 0.82, 0.05, 1.0], np.float32)
 GREEN = np.array([0.1, 0.85, 0.2, 1.0], np.float32)
 RED = np.array([0.95, 0.1, 0.08, 1.0], np.float32)
+# The video's legend (`legend`), one line a colour; grey, the strings' own colour, needs none.
+LEGEND = (("yellow", "pressed, ready to pick"), ("green", "picked right"), ("red", "picked wrong"))
 
 
 def in_state(goal_left, press) -> np.ndarray:
@@ -77,3 +80,8 @@ def color_names(colors) -> list[str]:
     """'grey' / 'yellow' / 'green' / 'red' per string, for reports and tests."""
     names = {"grey": GREY, "yellow": YELLOW, "green": GREEN, "red": RED}
     return [next((k for k, v in names.items() if np.allclose(c, v)), "other") for c in np.asarray(colors)]
+
+
+def legend() -> str:
+    """The caption lines that name the string colours (`LEGEND`), as the video shows them under its F1."""
+    return "\n".join(f"{name}: {meaning}" for name, meaning in LEGEND)

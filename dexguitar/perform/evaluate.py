@@ -8,6 +8,8 @@ before and after (`policy.unsynchronized`) reuses it.
 """
 from __future__ import annotations
 
+import json
+import math
 import time
 from collections import defaultdict
 
@@ -150,9 +152,13 @@ def note_rows(scores, ended, dur, song, hands) -> list[dict]:
     return rows
 
 
+UNDEFINED = "no note concerned this hand: nothing to press or pick, and nothing pressed or picked"
+
+
 def summarize(rows, hands) -> dict:
     """Mean precision/recall/F1 per hand over the notes that concern it (a target to press or pick, or a press or
-    pick that happened: an open-string note played cleanly is no evidence for the left hand), and per chord."""
+    pick that happened: an open-string note played cleanly is no evidence for the left hand), and per chord. A hand
+    no note concerned has NaN means (null in JSON, `dumps`) and `undefined`, the reason."""
     out = {}
     played = [r for r in rows if not r["rest"]]
     for h in hands:
@@ -162,6 +168,8 @@ def summarize(rows, hands) -> dict:
         out[h] = {"precision": float(vals[:, 0].mean()) if len(vals) else float("nan"),
                   "recall": float(vals[:, 1].mean()) if len(vals) else float("nan"),
                   "f1": float(vals[:, 2].mean()) if len(vals) else float("nan"), "notes": len(vals)}
+        if not len(vals):
+            out[h]["undefined"] = UNDEFINED
     chords = defaultdict(list)
     for r in played:
         if r["chord"]:
@@ -169,6 +177,26 @@ def summarize(rows, hands) -> dict:
     out["chords"] = {" ".join("x" if f < 0 else str(f) for f in reversed(k)): float(np.mean(v))
                      for k, v in chords.items()}
     return out
+
+
+def finite(obj):
+    """`obj` for JSON, which has no NaN or infinity: every such float becomes None (null), NumPy scalars plain
+    numbers; dicts, lists and tuples are copied."""
+    if isinstance(obj, dict):
+        return {k: finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [finite(v) for v in obj]
+    if isinstance(obj, np.generic):
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def dumps(obj, **kwargs) -> str:
+    """`json.dumps` of results: undefined numbers (NaN, infinity) written as null (`finite`), never as the `NaN`
+    that JSON readers other than Python's refuse."""
+    return json.dumps(finite(obj), allow_nan=False, **kwargs)
 
 
 def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str | None = None) -> dict:

@@ -41,7 +41,7 @@ from dexguitar.motion import load_motion
 from dexguitar.motion.kinematics import reference_frames
 from dexguitar.music import load_song
 from dexguitar.music import timeline as TL
-from dexguitar.perform.evaluate import evaluate, evaluate_synchronizer
+from dexguitar.perform.evaluate import dumps, evaluate, evaluate_synchronizer
 
 ROOT = Path(__file__).resolve().parents[2]
 STAGES = ("left", "right", "sync")
@@ -267,14 +267,14 @@ def run_songs(paths, out, recipe: Recipe = Recipe(), per_song: bool = False, log
             book.run(stage)
         rows += book.evaluate()
         write_table(rows, out)
-    (log or (lambda m: print(m, file=sys.stderr)))(f"songs: {len(rows)} rows in {out / 'songs.json'} "
-                                                    f"({(time.perf_counter() - t0) / 60:.1f} min)")
+    (log or (lambda m: print(m, file=sys.stderr)))(f"songs: {len(rows)} row{'s' * (len(rows) != 1)} in "
+                                                    f"{out / 'songs.json'} ({(time.perf_counter() - t0) / 60:.1f} min)")
     return rows
 
 
 def write_table(rows: list[dict], out) -> None:
     out = Path(out)
-    (out / "songs.json").write_text(json.dumps(rows, indent=1))
+    (out / "songs.json").write_text(dumps(rows, indent=1))
     lines = ["| song | left | right | both before | both after | left after | right after | GPU min | trained on |",
              "|---|---:|---:|---:|---:|---:|---:|---:|---|"]
     for r in rows:

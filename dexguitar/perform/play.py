@@ -17,7 +17,6 @@ Per-note verdicts (the "both hands" rules of `envs/scoring.py`, Sec. 6.1):
 from __future__ import annotations
 
 import dataclasses
-import json
 import sys
 import time
 from pathlib import Path
@@ -28,13 +27,14 @@ import numpy as np
 
 from dexguitar import envs
 from dexguitar.learn import policy as PO
+from dexguitar.motion import export as EX
 from dexguitar.motion import feedforward as FF
 from dexguitar.motion.glcheck import INSTALL, NoGL
 from dexguitar.music import load_song
 from dexguitar.music import timeline as TL
 from dexguitar.perform import audio, colors
 from dexguitar.perform import video as V
-from dexguitar.perform.evaluate import note_scores, rollout_song, summarize
+from dexguitar.perform.evaluate import dumps, note_scores, rollout_song, summarize
 from dexguitar.world import stage
 
 FPS = 60
@@ -153,25 +153,44 @@ def render_colors(rec: dict) -> np.ndarray:
 
 # ---------------------------------------------------------------------------------------------------- reports
 
+def _count(n: int, word: str) -> str:
+    """'1 note', '2 notes'."""
+    return f"{n} {word}{'' if n == 1 else 's'}"
+
+
 def _fmt_frets(frets) -> str:
-    return "-" if frets is None else " ".join("x" if f < 0 else str(f) for f in reversed(frets))
+    return "-" if frets is None else " ".join("x" if f < 0 else str(f) for f in frets)
+
+
+def report_note(row: dict) -> dict:
+    """A per-note row as the report holds it: its frets as `frets_6_to_1`, string 6 (low E) first, the order of the
+    table and of the chord names in the summary (a row of `note_verdicts` has them string 1 first, as a Song)."""
+    return {("frets_6_to_1" if k == "frets" else k): (v[::-1] if k == "frets" and v is not None else v)
+            for k, v in row.items()}
 
 
 def format_report(report: dict) -> str:
-    """A human-readable per-note table and the totals."""
-    judged = sum(r["note"] >= 0 for r in report["notes"])
-    lines = [f"{report['title']}: {report['seconds']:.1f} s, {judged} notes judged"]
+    """A human-readable per-note table and the totals. The header counts the notes and the rests judged apart (a rest
+    played cleanly is in no hand's F1), and the count-in before the song where something happened in it; each F1 is
+    the mean over the notes where that hand had something to do or did something, as `summarize` counts them."""
+    song_rows = [r for r in report["notes"] if r["note"] >= 0]
+    rests = sum(bool(r["rest"]) for r in song_rows)
+    parts = [_count(len(song_rows) - rests, "note")] + [_count(rests, "rest")] * (rests > 0)
+    parts += ["the count-in"] * (len(song_rows) < len(report["notes"]))
+    judged = parts[0] if len(parts) == 1 else ", ".join(parts[:-1]) + " and " + parts[-1]
+    lines = [f"{report['title']}: {report['seconds']:.1f} s, {judged} judged"]
     lines.append(f"{'#':>4s} {'frame':>6s} {'frets (6..1)':>14s} {'left':>5s} {'right':>5s} {'both':>5s}  verdict")
     for r in report["notes"]:
         if r["note"] < 0 and r["verdict"] == "rest":
             continue                                  # the env's grace rest before the song, played as a rest
-        lines.append(f"{r['note']:4d} {r['onset_frame']:6d} {_fmt_frets(r['frets']):>14s} {r['left']['f1']:5.2f} "
-                     f"{r['right']['f1']:5.2f} {r['both']['f1']:5.2f}  {r['verdict']}"
+        lines.append(f"{r['note']:4d} {r['onset_frame']:6d} {_fmt_frets(r['frets_6_to_1']):>14s} "
+                     f"{r['left']['f1']:5.2f} {r['right']['f1']:5.2f} {r['both']['f1']:5.2f}  {r['verdict']}"
                      + (f" ({r['why']}; picked {r['picked'] or 'nothing'})" if r["why"] else ""))
     c, s = report["counts"], report["summary"]
     lines.append("verdicts: " + ", ".join(f"{k} {v}" for k, v in c.items()))
-    lines.append("F1 " + "  ".join(f"{h} {s[h]['f1']:.3f} (P {s[h]['precision']:.3f} R {s[h]['recall']:.3f}, "
-                                   f"{s[h]['notes']} notes)" for h in ("left", "right", "both")))
+    lines.append("F1, the mean over the notes each hand had to play or played:")
+    lines += [f"  {h:5s} {s[h]['f1']:.3f} (P {s[h]['precision']:.3f} R {s[h]['recall']:.3f}, "
+              f"{_count(s[h]['notes'], 'note')})" for h in ("left", "right", "both")]
     return "\n".join(lines)
 
 
@@ -188,20 +207,24 @@ def running_f1(rows: list[dict], n_frames: int, hand: str = "both") -> tuple[np.
 
 
 def caption(song, notes: int, f1: float) -> str:
-    """The on-screen caption: the song, its tempo and the both-hands F1 of the notes judged so far."""
-    score = f"{f1:.3f} ({notes} notes)" if notes else "-"
-    return f"{song.title or 'untitled'}\n{song.tempo:g} bpm\nF1 both hands: {score}"
+    """The on-screen caption: the song, its tempo, the both-hands F1 of the notes judged so far, and the legend of
+    the string colours (`colors.legend`)."""
+    score = f"{f1:.3f} ({_count(notes, 'note')})" if notes else "-"
+    return f"{song.title or 'untitled'}\n{song.tempo:g} bpm\nF1 both hands: {score}\n{colors.legend()}"
 
 
 def perform(song, params, spec: PO.PolicySpec, out_prefix="perf", *, seconds: float | None = None,
             video: bool = True, video_fps: float = 30.0, width: int = 1280, height: int = 720, camera: str = "front",
-            captions: bool = False, env_config=None, quiet: bool = False) -> dict:
+            captions: bool = False, env_config=None, quiet: bool = False, motion: bool = False) -> dict:
     """Play `song` (a Song, an embedded song's name or a tab file) with a duet policy (a synchronizer's params and
     spec from `policy.load`, or `pair(left, right)`) and write `<out_prefix>.mp4` (with sound; a
     `<out_prefix>.png` contact sheet when imageio-ffmpeg is missing or `video=False`), `<out_prefix>.wav` and
     `<out_prefix>-report.json`; print the per-note report unless `quiet`. `camera`: "front" (both hands) or
-    "closeup" (the fretting hand); `captions`: the song, tempo and running F1 in the picture. Without an offscreen
-    OpenGL there is no picture: the rest is written and one line says what to install.
+    "closeup" (the fretting hand); `captions`: the song, tempo, running F1 and the legend of the string colours in
+    the picture. The report's notes give frets as `frets_6_to_1` (string 6 first, as its table). Without an offscreen
+    OpenGL there is no picture: the rest is written and one line says what to install. `motion`: also the hands'
+    motions, `<out_prefix>-left.npz` and `<out_prefix>-right.npz` (60 Hz), and `<out_prefix>.bvh` of both hands for
+    animation tools (`motion.export`).
     Returns the report dict (notes, verdict counts, F1 per hand, output paths, timings)."""
     if not hasattr(song, "notes"):
         song = load_song(song)
@@ -221,6 +244,8 @@ def perform(song, params, spec: PO.PolicySpec, out_prefix="perf", *, seconds: fl
     events = audio.events_from_info(rec, FPS)
     wav = audio.write_wav(out_prefix.with_suffix(".wav"), audio.render_audio(events, length))
     timings["audio_s"] = time.perf_counter() - t
+    motions = EX.export_performance(out_prefix, rec["qpos"], FPS, mirror=bool(env_config and env_config.mirror),
+                                    name=song.title or "") if motion else {}
 
     t = time.perf_counter()
     model = stage.stage_model("duet", mirror=bool(env_config and env_config.mirror))
@@ -250,10 +275,11 @@ def perform(song, params, spec: PO.PolicySpec, out_prefix="perf", *, seconds: fl
               for k in ("right", "late", "wrong", "rest")}
     files = {} if picture is None else {"video" if picture.suffix == ".mp4" else "frames": str(picture)}
     files.update(audio=str(wav), report=str(out_prefix) + "-report.json")
+    files.update({kind: str(path) for kind, path in motions.items()})
     report = {"title": song.title, "seconds": length, "frames": rec["frames"], "counts": counts,
-              "summary": summary, "notes": rows, "events": len(events), "files": files,
+              "summary": summary, "notes": [report_note(r) for r in rows], "events": len(events), "files": files,
               "timings": {k: round(v, 2) for k, v in timings.items()}}
-    Path(report["files"]["report"]).write_text(json.dumps(report, indent=1))
+    Path(report["files"]["report"]).write_text(dumps(report, indent=1))
     if not quiet:
         print(format_report(report))
         print("wrote " + ", ".join(report["files"].values()))

@@ -1,6 +1,7 @@
 """Watch a performance: the stage (`world.stage`) rendered headless from its "front" camera (both hands) or its
-"closeup" (the fretting hand), strings coloured per frame (`colors.py`), an optional caption, as an MP4 with the
-synthesized audio, or a PNG contact sheet when no ffmpeg is around.
+"closeup" (the fretting hand), strings coloured per frame (`colors.py`), an optional caption (`play.caption`: the
+song, the running F1 and the colours' legend), as an MP4 with the synthesized audio, or a PNG contact sheet when no
+ffmpeg is around.
 
 Why this way: MuJoCo's own OpenGL renderer needs nothing beyond MuJoCo and an offscreen GL (OSMesa or EGL, through
 `motion.render.Offscreen`); only the kinematics are recomputed per frame (the recorded qpos is the whole state of
