@@ -37,9 +37,8 @@ def check_file(path: str | Path, what: str = "a tab file") -> None:
 
 
 def read_bytes(path: Path, limit: int = MAX_FILE_BYTES) -> bytes:
-    """The bytes of a tab file; `SongError` if it is missing, a special file (`check_file`), unreadable or larger
-    than `limit` (each reader says what an empty file is not)."""
-    check_file(path)
+    """The bytes of a tab file; `SongError` if it is missing, a special file (`read_input` looks before it opens),
+    unreadable or larger than `limit` (each reader says what an empty file is not)."""
     return read_input(path, "a tab file", SongError, limit, " (real tabs are tens of KB)", empty_ok=True)
 
 
