@@ -6,9 +6,9 @@ STAMP := $(VENV)/.installed-stamp
 
 .PHONY: setup demo test check models clean train-left train-left-general train-right sync songs eval plot
 SONG ?= ode_to_joy
-CONFIG_LEFT ?= experiments/left_gpu.py
-CONFIG_RIGHT ?= experiments/right_gpu.py
-CONFIG_SYNC ?= experiments/sync_hold.py
+CONFIG_LEFT ?= left_gpu
+CONFIG_RIGHT ?= right_gpu
+CONFIG_SYNC ?= sync_hold
 # make sync: the general pair (GSync) unless LEFT=/RIGHT= name others
 LEFT ?= models/policies/left_general
 RIGHT ?= models/policies/right_mixed
@@ -46,7 +46,7 @@ train-left: $(STAMP)           ## make train-left SONG="ode_to_joy twinkle" [MOT
 	  --out $(OUT)/left-$(firstword $(notdir $(SONG))) $(if $(MOTION),--motion $(MOTION)) $(if $(RESUME),--resume)
 
 train-left-general: $(STAMP)   ## the general left hand: a residual held to the planner by a prior, balanced procedural material [RESUME=1]
-	$(BIN)/dexguitar train --hand left --style general --procedural 256 --config experiments/left_general_anchored.py \
+	$(BIN)/dexguitar train --hand left --style general --procedural 256 --config left_general_anchored \
 	  --out $(OUT)/left-general $(if $(RESUME),--resume) $(if $(DEVICES),--devices $(DEVICES))
 
 train-right: $(STAMP)          ## procedural picking and strumming patterns

@@ -30,8 +30,8 @@ from dexguitar.errors import UserError
 from dexguitar.learn.executable import in_flight
 from dexguitar.learn.memory import check_envs, env_bytes, training_bytes
 from dexguitar.learn import policy as PO
-from dexguitar.learn.run import (check_init, check_out, compilation_cache, load_config, recorded_config, train,
-                                 xla_flags)
+from dexguitar.configs import load_config, recorded_config
+from dexguitar.learn.run import check_init, check_out, compilation_cache, train, xla_flags
 from dexguitar.learn.sync import SyncTrainer
 from dexguitar.learn.trainer import Trainer
 from dexguitar.motion import load_motion
@@ -43,8 +43,9 @@ from dexguitar.music.tab_json import write_json_tab
 from dexguitar.perform import pipeline, plots
 from dexguitar.perform import play as PL
 from dexguitar.perform.evaluate import dumps, evaluate, evaluate_synchronizer
+from dexguitar.shipped import policies_dir
 
-POLICIES = Path(__file__).resolve().parents[1] / "models" / "policies"
+POLICIES = policies_dir()        # $DEXGUITAR_POLICIES, else models/policies as installed (`shipped`)
 
 
 def positive(text: str) -> int:
@@ -171,7 +172,7 @@ def _material(args, hand: str):
 
 
 def _train(args) -> int:
-    cfg, env_cfg = load_config(args.config, hand=args.hand, num_envs=args.envs, minibatch=args.minibatch,
+    cfg, env_cfg = load_config(args.config, args.set, hand=args.hand, num_envs=args.envs, minibatch=args.minibatch,
                                seed=args.seed, iterations=args.iterations)
     check_out(args.out, args.resume)
     songs = _material(args, cfg.hand)
@@ -219,9 +220,9 @@ def _sync(args) -> int:
     overrides = dict(hand="duet", num_envs=args.envs, minibatch=args.minibatch, seed=args.seed,
                      iterations=args.iterations)
     if recorded and not args.config:
-        cfg, env_cfg = recorded_config(recorded, **overrides)
+        cfg, env_cfg = recorded_config(recorded, args.set, **overrides)
     else:
-        cfg, env_cfg = load_config(args.config, **overrides)
+        cfg, env_cfg = load_config(args.config, args.set, **overrides)
     check_out(out, args.resume)
     songs = [load_song(s, track=track) for s in song_files]
     pair = PO.load_pair(left, right)
@@ -255,7 +256,8 @@ def _songs(args) -> int:
         "right_minutes": args.right_minutes,
         "sync_minutes": args.sync_minutes, "left_target": args.left_target, "right_target": args.right_target,
         "sync_target": args.sync_target, "judge_seconds": args.judge_seconds, "iterations": args.iterations,
-        "envs": args.envs}.items() if v is not None})
+        "envs": args.envs, **{f"{stage}_set": tuple(args.set + getattr(args, f"set_{stage}"))
+                              for stage in pipeline.STAGES}}.items() if v is not None})
     if args.left_init == "none":
         recipe = dataclasses.replace(recipe, left_init=None)
     rows = pipeline.run_songs(args.tabs, args.out, recipe, per_song=args.per_song)
@@ -366,8 +368,8 @@ def _plot(args) -> int:
 
 def _add_run_args(p: argparse.ArgumentParser, out_help: str) -> None:
     """The options every resumable training run has (`train`, `sync`)."""
-    p.add_argument("--config", help="experiments/*.py defining CONFIG (a TrainConfig) and optionally ENV (sync "
-                                    "--resume without it: the run's own, from its config.json)")
+    p.add_argument("--config", help=f"{CONFIG_HELP} (sync --resume without it: the run's own, from its config.json)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
     p.add_argument("--out", required=True, help=out_help)
     p.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
     p.add_argument("--envs", type=positive, help="override CONFIG.num_envs")
@@ -386,6 +388,11 @@ def _add_run_args(p: argparse.ArgumentParser, out_help: str) -> None:
     p.add_argument("--num-processes", type=positive)
     p.add_argument("--process-id", type=int)
 
+
+CONFIG_HELP = ("a config: the name of one in dexguitar/configs/ (e.g. left_gpu, sync_hold, cpu_smoke) or a .py file "
+               "defining CONFIG (a TrainConfig) and optionally ENV (an EnvConfig)")
+SET_HELP = ("override a field of the config's TrainConfig (e.g. num_envs=1024), or of its EnvConfig as env.KEY (e.g. "
+            "env.hold_reward=0.5); repeatable; recorded in config.json with the config, so --resume checks it")
 
 TRACK_HELP = ("which track of a multi-track tab to read, from 0 (JSON, Guitar Pro, MIDI, MusicXML; an ASCII tab "
               "holds track 0 alone). Without it a JSON tab of several different tracks is refused, naming them; "
@@ -467,12 +474,17 @@ def build_parser() -> argparse.ArgumentParser:
                        f"{getattr(pipeline.Recipe, stage + '_target')})")
     p.add_argument("--judge-seconds", type=positive_float, help="training time between two judgements of a stage's "
                    f"export (default {pipeline.Recipe.judge_seconds:g})")
-    p.add_argument("--config-left")
-    p.add_argument("--config-right")
-    p.add_argument("--config-sync")
+    for stage in pipeline.STAGES:
+        p.add_argument(f"--config-{stage}", help=f"the {stage} stage's config (default "
+                       f"{getattr(pipeline.Recipe, stage + '_config')}): a name in dexguitar/configs/ or a .py file")
+        p.add_argument(f"--set-{stage}", action="append", default=[], metavar="KEY=VALUE",
+                       help=f"override a field of the {stage} stage's config, as --set")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a field of every "
+                   "stage's config: KEY of its TrainConfig, env.KEY of its EnvConfig; repeatable; recorded in each "
+                   "stage's config.json, so a resumed stage checks it")
     p.add_argument("--left-init", help="the left-hand policy to start from (default models/policies/left_official15; "
-                   "'none' with --config-left experiments/left_songs.py: from scratch; with experiments/left_residual.py: "
-                   "a residual on the IK planner)")
+                   "'none' with --config-left left_songs: from scratch; with left_residual: a residual on the IK "
+                   "planner)")
     p.add_argument("--right-init", help="the right-hand policy to start from (default models/policies/right_mixed)")
     p.add_argument("--envs", type=positive, help="override every stage's num_envs")
     p.add_argument("--iterations", type=positive, help="cap every stage's iterations")

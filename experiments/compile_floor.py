@@ -58,7 +58,7 @@ def timed_compile(name: str, fn, *args) -> dict:
 
 def main(song_file: str, envs: int = 0) -> list:
     jax.config.update("jax_enable_compilation_cache", False)
-    cfg, env_cfg = load_config("experiments/sync_hold.py", hand="duet", num_envs=envs or None)
+    cfg, env_cfg = load_config("sync_hold", hand="duet", num_envs=envs or None)
     if envs:
         cfg = dataclasses.replace(cfg, minibatch=min(cfg.minibatch, envs * cfg.horizon))
     pair = PO.load_pair("models/policies/left_general", "models/policies/right_mixed")

@@ -39,7 +39,7 @@ def main(song_file: str, mode: str, envs: int = 0) -> dict:
         out[stage] = round(time.perf_counter() - t0, 1)
         print(json.dumps(out), file=sys.stderr, flush=True)
 
-    cfg, env_cfg = load_config("experiments/sync_hold.py", hand="duet", num_envs=envs or None)
+    cfg, env_cfg = load_config("sync_hold", hand="duet", num_envs=envs or None)
     if envs:
         cfg = dataclasses.replace(cfg, minibatch=min(cfg.minibatch, envs * cfg.horizon))
     pair = PO.load_pair("models/policies/left_general", "models/policies/right_mixed")

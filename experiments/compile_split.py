@@ -58,7 +58,7 @@ def main(song_file: str, envs: int = 0, runs: int = 0) -> dict:
     compilation_cache(os.environ.get("DEXGUITAR_CACHE"))
     if os.environ.get("RESET_STUB"):
         stub_reset()
-    cfg, env_cfg = load_config("experiments/sync_hold.py", hand="duet", num_envs=envs or None)
+    cfg, env_cfg = load_config("sync_hold", hand="duet", num_envs=envs or None)
     if envs:
         cfg = dataclasses.replace(cfg, minibatch=min(cfg.minibatch, envs * cfg.horizon))
     pair = PO.load_pair("models/policies/left_general", "models/policies/right_mixed")

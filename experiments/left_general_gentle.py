@@ -18,9 +18,8 @@ warm-up (left_general_scaled.py).
         --out runs/left-general-gentle --max-minutes 19
 """
 import dataclasses
-import os
-import runpy
 
-_residual = runpy.run_path(os.path.join(os.path.dirname(__file__), "left_general_residual.py"))
-CONFIG = dataclasses.replace(_residual["CONFIG"], kl_target=0.01, actor_lr=1e-5, log_std_init=-5.3, actor_warmup=50)
-ENV = _residual["ENV"]
+from dexguitar.configs import left_general_residual as _residual
+
+CONFIG = dataclasses.replace(_residual.CONFIG, kl_target=0.01, actor_lr=1e-5, log_std_init=-5.3, actor_warmup=50)
+ENV = _residual.ENV

@@ -21,9 +21,8 @@ rise, the residual stayed at a prior KL of 0.005 per state, and the hand plays a
 """
 import dataclasses
 import math
-import os
-import runpy
 
-_anchored = runpy.run_path(os.path.join(os.path.dirname(__file__), "left_general_anchored.py"))
-CONFIG = dataclasses.replace(_anchored["CONFIG"], log_std_init=math.log(0.05))
-ENV = dataclasses.replace(_anchored["ENV"], margin_reward=1.0)
+from dexguitar.configs import left_general_anchored as _anchored
+
+CONFIG = dataclasses.replace(_anchored.CONFIG, log_std_init=math.log(0.05))
+ENV = dataclasses.replace(_anchored.ENV, margin_reward=1.0)

@@ -17,10 +17,9 @@ fell from 0.835 to 0.748.
 """
 import dataclasses
 import math
-import os
-import runpy
 
-_residual = runpy.run_path(os.path.join(os.path.dirname(__file__), "left_general_residual.py"))
-CONFIG = dataclasses.replace(_residual["CONFIG"], action_scale=0.01, log_std_init=math.log(0.5), kl_target=0.01,
+from dexguitar.configs import left_general_residual as _residual
+
+CONFIG = dataclasses.replace(_residual.CONFIG, action_scale=0.01, log_std_init=math.log(0.5), kl_target=0.01,
                              actor_lr=1e-4, actor_warmup=50)
-ENV = _residual["ENV"]
+ENV = _residual.ENV

@@ -74,7 +74,7 @@ TRAIN = [
     ("md", '''\
 # Train one hand
 
-Trains the **left hand** on *Ode to Joy* with PPO plus motion imitation (`experiments/left_gpu.py`: 4,096 envs),
+Trains the **left hand** on *Ode to Joy* with PPO plus motion imitation (the config `left_gpu`: 4,096 envs),
 for 8 minutes of wall time, then evaluates it by the paper's per-note F1 and plots F1 against the samples seen.
 
 Wants a **GPU runtime** on Colab (*Runtime → Change runtime type*): about 15 minutes in all (setup 2–3 min,
@@ -89,13 +89,13 @@ recycles the machine loses `/content`; to survive that, put `RUN` on a mounted G
     ("md", '''\
 ## Train
 
-`dexguitar train --hand left --song ode_to_joy --config experiments/left_gpu.py --out runs/left --max-minutes 8`.
+`dexguitar train --hand left --song ode_to_joy --config left_gpu --out runs/left --max-minutes 8`.
 Progress goes to stderr (samples/s, F1, reward); `runs/left/metrics.jsonl` gets a line per call, `runs/left/policy/`
 the exported policy.'''),
     ("code", '''\
 RUN = str(WORK / "runs" / "left")
 RESUME = False           # True: continue RUN from its last checkpoint (after a disconnect, or to train longer)
-CONFIG = "experiments/cpu_smoke.py" if TINY else "experiments/left_gpu.py"
+CONFIG = "cpu_smoke" if TINY else "left_gpu"      # dexguitar/configs/
 
 args = ["train", "--hand", "left", "--song", "ode_to_joy", "--config", CONFIG, "--out", RUN, "--max-minutes", "8"]
 if TINY:
@@ -128,7 +128,7 @@ SYNC = [
 Two frozen policies — the left hand trained on *Strumming G - C - D* (`models/policies/left_strum_g_c_d`) and the
 right hand trained on procedural picking and strumming patterns (`models/policies/right_patterns`) — are played
 together in the duet env, and a small synchronizer (Sec. 4 of the paper) learns to shift their latents so that the
-left hand presses before the right hand picks. `experiments/sync_gpu.py`: 4,096 duet envs.
+left hand presses before the right hand picks. The config `sync_gpu`: 4,096 duet envs.
 
 Wants a **GPU runtime** on Colab (*Runtime → Change runtime type*): about 10 minutes in all (setup 2–3 min,
 compilation 1–3 min, training 5 min, evaluation before and after synchronization about a minute). After a
@@ -139,13 +139,13 @@ checkpoint (`--left`/`--right` are then taken from the run).'''),
 ## Train the synchronizer
 
 `dexguitar sync --song strum_g_c_d --left models/policies/left_strum_g_c_d --right models/policies/right_patterns
---config experiments/sync_gpu.py --out runs/sync-strum --max-minutes 5`. When training stops it evaluates the pair
+--config sync_gpu --out runs/sync-strum --max-minutes 5`. When training stops it evaluates the pair
 before and after synchronization on the song and writes `runs/sync-strum/eval.json`.'''),
     ("code", '''\
 LEFT, RIGHT = "models/policies/left_strum_g_c_d", "models/policies/right_patterns"
 SONG = str(TINY_SONG) if TINY else "strum_g_c_d"
 RUN = str(WORK / "runs" / "sync-strum")
-CONFIG = "experiments/cpu_smoke.py" if TINY else "experiments/sync_gpu.py"
+CONFIG = "cpu_smoke" if TINY else "sync_gpu"      # dexguitar/configs/
 
 args = ["sync", "--song", SONG, "--left", LEFT, "--right", RIGHT, "--config", CONFIG, "--out", RUN,
         "--max-minutes", "5"]

@@ -21,8 +21,12 @@ from dexguitar.learn.run import FAST_COMPILE, xla_flags
 # And the flag the commands themselves add (`learn/run.py`, `FAST_COMPILE`): JAX's persistent-cache keys hash XLA_FLAGS
 # as it is at each compile, so a test calling `cli.main` would otherwise change the keys of every later compile in its
 # process, and miss the programs that earlier tests cached (on a 2-core machine: 19.5 min, 17.6 min with the flag here).
+# One LLVM module per program rather than several compiled by parallel threads: each of the 2 test processes keeps one
+# core busy already, and the split itself costs (a duet step: 8.4 -> 7.4 s).
 os.environ["XLA_FLAGS"] = xla_flags(os.environ.get("XLA_FLAGS", ""), ("--xla_backend_optimization_level=0",
-                                                                      "--xla_cpu_use_fusion_emitters=false", FAST_COMPILE))
+                                                                      "--xla_cpu_use_fusion_emitters=false",
+                                                                      "--xla_cpu_parallel_codegen_split_count=1",
+                                                                      FAST_COMPILE))
 
 # an empty DEXGUITAR_TEST_CACHE is unset (not the working directory, which would fill with cache files)
 CACHE = Path(os.environ.get("DEXGUITAR_TEST_CACHE") or Path(__file__).resolve().parent.parent / ".cache" / "xla")
@@ -49,27 +53,22 @@ def compiles():
 
 
 @pytest.fixture
-def compiles_per_call(compiles, monkeypatch):
-    """run(trainer, out, calls=2) -> the number of compilations of each host call of `train`, counted from the end
-    of one call (its export) to the end of the next (the first count includes building the run)."""
+def export_compiles(compiles, monkeypatch):
+    """A list that gets the compile count (`compiles`) at each export of a run, the last thing a host call of `train`
+    does: the difference of two entries is what the later host call compiled. Also empties this process's chunks
+    (`learn.executable._LIVE`), so that a run compiles or loads its chunk rather than take an earlier test's."""
     from dexguitar.learn import checkpoint as C
     from dexguitar.learn import executable as X
-    from dexguitar.learn import run as RUN
-    monkeypatch.setattr(X, "_LIVE", {})        # not a chunk that an earlier test of this process compiled
+    monkeypatch.setattr(X, "_LIVE", {})
+    counts, save = [], C.Saver.save
 
-    def run(trainer, out, calls: int = 2) -> list[int]:
-        counts, save = [], C.Saver.save
-
-        def counting_save(saver, *args, **kwargs):
-            out = save(saver, *args, **kwargs)
-            if saver.directory.parent.name == "policy":  # the export: the last thing a host call does
-                counts.append(compiles())
-            return out
-        monkeypatch.setattr(C.Saver, "save", counting_save)
-        start = compiles()
-        RUN.train(trainer, out, iterations=calls, progress=False, log=lambda m: None)
-        return [b - a for a, b in zip([start] + counts[:-1], counts)]
-    return run
+    def counting_save(saver, *args, **kwargs):
+        done = save(saver, *args, **kwargs)
+        if saver.directory.parent.name == "policy":
+            counts.append(compiles())
+        return done
+    monkeypatch.setattr(C.Saver, "save", counting_save)
+    return counts
 
 
 @pytest.fixture(scope="session")
@@ -93,15 +92,9 @@ def compiled_chunk():
 
 @pytest.fixture(scope="session")
 def left_trainer():
-    """The tiny left-hand trainer that several test files share (4 envs, one song): one compiled program for all."""
-    from dexguitar.learn.trainer import Trainer, TrainConfig
-    from dexguitar.motion import load_motion
-    from dexguitar.motion.kinematics import reference_frames
-    from dexguitar.music import library
-    from dexguitar.music import timeline as TL
-    cfg = TrainConfig(num_envs=4, horizon=4, minibatch=8, epochs=2, disc_steps=2, disc_buffer=64, disc_batch=16,
-                      iterations_per_call=1)
-    return Trainer(cfg, [TL.from_song(library.load("ode_to_joy"))], reference_frames(load_motion("left")))
+    """The tiny left-hand trainer that several test files share (tests/tiny.py): one compiled program for all."""
+    import tiny
+    return tiny.left_trainer()
 
 
 @pytest.fixture(scope="session")
@@ -120,12 +113,12 @@ def offscreen_gl() -> str:
 # ------------------------------------------------------------------------------------------- scheduling (xdist)
 # Tests that share a compiled program: one process runs them in this order, the first one compiling it.
 GROUPS = {
-    "left_trainer": ("tests/test_faults.py", "tests/test_learn.py", "tests/test_compile_once.py",
-                     "tests/test_notebooks.py::test_train_a_hand"),      # the `left_trainer` chunk, the left eval
+    "left_trainer": ("tests/test_faults.py", "tests/test_devices.py", "tests/test_learn.py",
+                     "tests/test_compile_once.py", "tests/test_notebooks.py::test_train_a_hand"),  # its chunk, eval
     "sync": ("tests/test_sync.py", "tests/test_notebooks.py::test_synchronize"),   # the tiny synchronizer chunk
 }
 # Longest first (a group or a file; the rest follow in their usual order): measured with an empty cache, 2 processes.
-FIRST = ("left_trainer", "tests/test_devices.py", "sync", "tests/test_envs.py", "tests/test_world.py",
+FIRST = ("left_trainer", "sync", "tests/test_envs.py", "tests/test_world.py",
          "tests/test_scripted.py", "tests/test_notebooks.py", "tests/test_perform.py", "tests/test_retarget.py",
          "tests/test_cursor.py", "tests/test_rewards_metrics.py", "tests/test_detect.py")
 

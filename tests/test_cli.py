@@ -1,4 +1,5 @@
-"""The `dexguitar` command on songs: info, convert, clear errors."""
+"""The `dexguitar` command: songs (info, convert), clear errors, configs by name with `--set` overrides."""
+import dataclasses
 import json
 import os
 import sys
@@ -77,3 +78,116 @@ def test_a_command_that_fails_while_its_chunk_compiles_exits_at_once():
     assert done.returncode == 2, done.stderr
     assert "error: a bad song" in done.stderr
     assert time.monotonic() - t < 40          # not the 60 s of the "compile"
+
+
+# ------------------------------------------------------------------------------------- configs: --config and --set
+
+def test_every_shipped_config_loads_by_name_and_by_path():
+    """Each module of dexguitar/configs/ says what it is for and defines CONFIG (and optionally ENV); a name and the
+    module's path give the same config."""
+    from pathlib import Path
+    from dexguitar import configs
+    from dexguitar.envs import EnvConfig
+    from dexguitar.configs import load_config
+    from dexguitar.learn.trainer import TrainConfig
+    names = configs.names()
+    assert {"cpu_smoke", "left_gpu", "right_gpu", "sync_gpu", "sync_hold", "left_finetune", "left_songs",
+            "right_songs", "left_general_anchored"} <= set(names)
+    for name in names:
+        module = configs.load(name)
+        assert module.__doc__ and len(module.__doc__) > 40, name
+        assert isinstance(module.CONFIG, TrainConfig) and isinstance(getattr(module, "ENV", None),
+                                                                     (EnvConfig, type(None))), name
+        path = str(Path(configs.__file__).parent / f"{name}.py")
+        assert load_config(name) == load_config(path), name
+    assert load_config("sync_hold")[1].hold_reward == 1.0
+
+
+def one_error_line(capsys) -> str:
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: "), err
+    return err[0]
+
+
+def test_an_unknown_config_or_field_is_one_line_naming_it(tmp_path, capsys):
+    run = ["train", "--song", "ode_to_joy", "--out", str(tmp_path / "run")]
+    assert main(run + ["--config", "left_gpuu"]) == 2
+    err = one_error_line(capsys)
+    assert "--config left_gpuu: no such config" in err and "cpu_smoke, " in err and "sync_hold" in err
+    assert main(run + ["--config", "experiments/left_gpu.py"]) == 2          # where the configs were
+    assert "--config left_gpu" in one_error_line(capsys)
+    assert main(run + ["--config", "cpu_smoke", "--set", "num_envz=8"]) == 2
+    err = one_error_line(capsys)
+    assert "--set num_envz: config cpu_smoke has no such field" in err and "num_envs" in err
+    assert main(run + ["--config", "left_songs", "--set", "env.shift=0"]) == 2
+    assert "--set env.shift: config left_songs has no such field" in one_error_line(capsys)
+    for bad, why in (("num_envs=many", "TrainConfig.num_envs is an integer, not 'many'"),
+                     ("clip=inf", "TrainConfig.clip is a finite number, not 'inf'"),
+                     ("env.fill_strum_gaps=perhaps", "EnvConfig.fill_strum_gaps is true or false, not 'perhaps'"),
+                     ("env.window_notes=10", "EnvConfig.window_notes is 2 values separated by commas, not '10'"),
+                     ("num_envs", "expected KEY=VALUE"),
+                     ("num_envs=0", "TrainConfig.num_envs must be at least 1, got 0")):
+        assert main(run + ["--config", "cpu_smoke", "--set", bad]) == 2
+        err = one_error_line(capsys)
+        assert f"--set {bad}" in err and "cpu_smoke" in err and why in err, err
+    assert main(run + ["--config", "cpu_smoke", "--set", "num_envs=8", "--envs", "4"]) == 2
+    assert "--set num_envs=8 disagrees with the command's own num_envs 4" in one_error_line(capsys)
+
+
+def test_set_reaches_the_trainer(tmp_path, monkeypatch):
+    """`--set` overrides CONFIG's fields and ENV's as env.KEY, parsed to each field's type; an env field of a config
+    without ENV starts from the env's defaults (the synchronizer's for `sync`)."""
+    from dexguitar import cli
+    built = {}
+
+    class Built(Exception):
+        pass
+
+    def trainer(cfg, songs, reference, *rest):
+        built.update(cfg=cfg, env=rest[-1])
+        raise Built
+    monkeypatch.setattr(cli, "Trainer", trainer)
+    monkeypatch.setattr(cli, "SyncTrainer", trainer)
+    monkeypatch.setattr(cli.PO, "load_pair", lambda left, right: (None, None))
+    with pytest.raises(Built):
+        main(["train", "--song", "ode_to_joy", "--out", str(tmp_path / "a"), "--config", "left_songs", "--set",
+              "clip=0.25", "--set", "iterations_per_call=3", "--set", "env.window_notes=4,8", "--set",
+              "env.fill_strum_gaps=false"])
+    cfg, env = built["cfg"], built["env"]
+    assert (cfg.clip, cfg.iterations_per_call, cfg.num_envs) == (0.25, 3, 4096)
+    assert (env.window_notes, env.fill_strum_gaps, env.shift_prob) == ((4, 8), False, 0.0)    # the rest: left_songs
+    with pytest.raises(Built):
+        main(["sync", "--song", "ode_to_joy", "--left", "L", "--right", "R", "--out", str(tmp_path / "b"),
+              "--config", "cpu_smoke", "--set", "env.hold_reward=0.5", "--set", "seed=7"])
+    from dexguitar.learn.sync import SYNC_ENV
+    assert built["cfg"].seed == 7 and built["cfg"].hand == "duet"
+    assert built["env"] == dataclasses.replace(SYNC_ENV, hold_reward=0.5)
+
+
+def test_the_overrides_are_recorded_and_checked_on_resume(tmp_path):
+    """A run records its config with the overrides applied (config.json's "train" and "env"), so --resume with
+    other overrides is refused naming the field, and `sync --resume` without --config takes them from there."""
+    from dexguitar.errors import RunError
+    from dexguitar.configs import load_config, recorded_config
+    from dexguitar.learn.run import RunDir
+    record = lambda cfg, env: json.loads(json.dumps({"train": dataclasses.asdict(cfg),       # noqa: E731
+                                                     "env": dataclasses.asdict(env)}))
+    made = record(*load_config("left_songs", ["clip=0.25", "env.tempo_delta=10"]))
+    (tmp_path / "config.json").write_text(json.dumps(made))
+    run = RunDir(tmp_path)
+    try:
+        run.check_resume(record(*load_config("left_songs", ["clip=0.25", "env.tempo_delta=10"])))
+        with pytest.raises(RunError, match=r"env\.tempo_delta: 10 -> 20; train\.clip: 0\.25 -> 0\.3"):
+            run.check_resume(record(*load_config("left_songs")))
+        cfg, env = recorded_config(made, ["seed=5"])
+        assert (cfg.clip, cfg.seed, env.tempo_delta) == (0.25, 5, 10)
+    finally:
+        run.close()
+
+
+def test_the_shipped_policies_are_found_in_one_place(tmp_path, monkeypatch):
+    from dexguitar import shipped
+    monkeypatch.delenv(shipped.POLICIES_ENV, raising=False)
+    assert (shipped.policies_dir() / "left_general" / "policy.json").exists()
+    monkeypatch.setenv(shipped.POLICIES_ENV, str(tmp_path))
+    assert shipped.policies_dir() == tmp_path

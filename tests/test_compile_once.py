@@ -17,38 +17,36 @@ def trainer(left_trainer):
     return left_trainer
 
 
-def test_a_second_train_call_compiles_nothing(trainer, tmp_path, compiles_per_call):
-    first, second = compiles_per_call(trainer, tmp_path / "run")
-    assert first >= 1            # the run did compile (the count would see it) ...
-    assert second == 0           # ... once
-
-
-def test_a_later_run_in_the_process_reuses_its_chunk(trainer, tmp_path, monkeypatch, compiles):
-    """A second run of the same code, config and shapes in one process (`dexguitar songs`: the next song of a
-    capacity) takes the chunk the first one compiled (`learn.executable`): nothing traced, lowered, compiled or
-    loaded, and the same numbers."""
+def test_a_second_call_compiles_nothing_and_a_later_run_in_the_process_reuses_its_chunk(trainer, tmp_path,
+                                                                                        monkeypatch, compiles,
+                                                                                        export_compiles):
+    """Within a run, the second host call of `train` compiles nothing. A second run of the same code, config and
+    shapes in one process (`dexguitar songs`: the next song of a capacity) takes the chunk the first one compiled
+    (`learn.executable`): nothing traced, lowered, compiled or loaded, and the same numbers."""
     from dexguitar.learn import executable as X
     from dexguitar.learn import run as RUN
     from dexguitar.learn.trainer import Trainer
     monkeypatch.setattr(X, "directory", lambda: tmp_path / "chunks")
-    monkeypatch.setattr(X, "_LIVE", {})
 
-    def train(out):
+    def train(out, iterations):
         logs = []
-        RUN.train(trainer, tmp_path / out, iterations=1, progress=False, log=logs.append)
+        RUN.train(trainer, tmp_path / out, iterations=iterations, progress=False, log=logs.append)
         rows = [json.loads(line) for line in (tmp_path / out / "metrics.jsonl").read_text().splitlines()]
         return logs, json.dumps([{k: v for k, v in r.items() if k not in ("seconds", "samples_per_s", "wall",
                                                                            "compile_s", "ckpt_s", "compact_s")}
-                                 for r in rows])        # as text: F1 is NaN before a note is judged
+                                 for r in rows[:1]])        # as text: F1 is NaN before a note is judged
 
-    logs, first = train("a")
+    start = compiles()
+    logs, first = train("a", 2)                     # two host calls (`iterations_per_call` 1)
     assert any(m.startswith("compiled the training chunk") for m in logs)
+    assert len(export_compiles) == 2 and export_compiles[0] > start    # the first call compiled (the count sees it)
+    assert export_compiles[1] == export_compiles[0]                     # ... and the second nothing
 
     def no_trace(*args, **kwargs):
         raise AssertionError("the chunk was traced")
     monkeypatch.setattr(Trainer, "make_train_chunk", no_trace)
     before = compiles()
-    logs, second = train("b")
+    logs, second = train("b", 1)
     assert any(m.startswith("reused the training chunk") for m in logs) and compiles() == before
     assert second == first
 

@@ -419,18 +419,22 @@ BAD = [
     ["song", "info", "{tmp}/missing.json"],
     ["song", "convert", "ode_to_joy", "{tmp}/no/such/dir/x.json"],
     ["song", "convert", "ode_to_joy", "{tmp}/x.txt"],
-    ["train", "--song", "{tmp}/empty", "--out", "{tmp}/r1", "--config", "experiments/cpu_smoke.py"],
-    ["train", "--song", "{tmp}/mistyped.json", "--out", "{tmp}/r2", "--config", "experiments/cpu_smoke.py"],
+    ["train", "--song", "{tmp}/empty", "--out", "{tmp}/r1", "--config", "cpu_smoke"],
+    ["train", "--song", "{tmp}/mistyped.json", "--out", "{tmp}/r2", "--config", "cpu_smoke"],
     ["train", "--song", "ode_to_joy", "--out", "{tmp}/r3", "--config", "{tmp}/missing.py"],
     ["train", "--song", "ode_to_joy", "--out", "{tmp}/r4", "--config", "{tmp}/noconfig.py"],
-    ["train", "--song", "ode_to_joy", "--out", "{tmp}/r5", "--config", "experiments/cpu_smoke.py", "--resume"],
-    ["train", "--song", "ode_to_joy", "--out", "{tmp}/afile", "--config", "experiments/cpu_smoke.py"],
-    ["train", "--song", "ode_to_joy", "--out", "{tmp}/r6", "--config", "experiments/cpu_smoke.py",
+    ["train", "--song", "ode_to_joy", "--out", "{tmp}/r5", "--config", "cpu_smoke", "--resume"],
+    ["train", "--song", "ode_to_joy", "--out", "{tmp}/afile", "--config", "cpu_smoke"],
+    ["train", "--song", "ode_to_joy", "--out", "{tmp}/r6", "--config", "cpu_smoke",
      "--motion", "{tmp}/motion.npz"],
-    ["train", "--song", "ode_to_joy", "--out", "{tmp}/r7", "--config", "experiments/cpu_smoke.py",
+    ["train", "--song", "ode_to_joy", "--out", "{tmp}/r7", "--config", "cpu_smoke",
      "--init-from", "{tmp}/nothing"],
     ["train", "--song", "ode_to_joy", "--out", "{tmp}/r8", "--config", "{tmp}/residual.py",   # a plain policy as
      "--init-from", "models/policies/left_ode_to_joy"],                                     # a residual's start
+    ["train", "--song", "ode_to_joy", "--out", "{tmp}/r9", "--config", "no_such_config"],
+    ["train", "--song", "ode_to_joy", "--out", "{tmp}/r10", "--config", "experiments/cpu_smoke.py"],   # moved
+    ["train", "--song", "ode_to_joy", "--out", "{tmp}/r11", "--config", "cpu_smoke", "--set", "num_envz=4"],
+    ["sync", "--song", "ode_to_joy", "--out", "{tmp}/s3", "--config", "cpu_smoke", "--set", "env.hold_reward=lots"],
     ["eval", "--ckpt", "{tmp}/nothing", "--song", "ode_to_joy"],
     ["sync", "--song", "ode_to_joy", "--left", "{tmp}/nothing", "--right", "{tmp}/nothing", "--out", "{tmp}/s1"],
     ["songs", "{tmp}/missing.json", "--out", "{tmp}/s2"],
@@ -447,8 +451,8 @@ def test_every_command_refuses_bad_paths_in_one_line(argv, tmp_path, capsys):
     (tmp_path / "empty").mkdir()
     (tmp_path / "noconfig.py").write_text("X = 1\n")
     (tmp_path / "afile").write_text("not a directory\n")
-    (tmp_path / "residual.py").write_text("import dataclasses, runpy\nfrom dexguitar.envs import EnvConfig\n"
-                                          "CONFIG = runpy.run_path('experiments/cpu_smoke.py')['CONFIG']\n"
+    (tmp_path / "residual.py").write_text("from dexguitar.configs.cpu_smoke import CONFIG\n"
+                                          "from dexguitar.envs import EnvConfig\n"
                                           "ENV = EnvConfig(feedforward=True)\n")
     (tmp_path / "motion.npz").write_bytes(b"PK\x03\x04 truncated")
     argv = [a.format(tmp=tmp_path) for a in argv]
@@ -468,14 +472,13 @@ def test_impossible_numbers_are_refused_by_the_parser(argv, capsys):
 
 def test_sync_and_play_without_policies_take_the_general_pair(tmp_path, monkeypatch, capsys):
     from dexguitar import cli
-    from dexguitar.motion.planner import LATEST
-    from dexguitar.motion.planner import RIGHT_LATEST
+    from dexguitar.motion.planner import PLANNER_VERSION, RIGHT_PLANNER_VERSION
     assert cli._general_pair("sync") == (str(cli.POLICIES / "left_general"), str(cli.POLICIES / "right_mixed"))
     assert cli._general_pair("play") == (str(cli.POLICIES / "left_general"), str(cli.POLICIES / "right_general"))
     meta = json.loads((cli.POLICIES / "left_general" / "policy.json").read_text())
-    assert meta["hand"] == "left" and meta["feedforward"] == LATEST        # a residual on the latest planner
+    assert meta["hand"] == "left" and meta["feedforward"] == PLANNER_VERSION        # a residual on the planner
     meta = json.loads((cli.POLICIES / "right_general" / "policy.json").read_text())
-    assert meta["hand"] == "right" and meta["right_feedforward"] == RIGHT_LATEST
+    assert meta["hand"] == "right" and meta["right_feedforward"] == RIGHT_PLANNER_VERSION
     monkeypatch.setitem(cli.GENERAL, "left", tmp_path / "none")          # a checkout without it
     for argv in (["sync", "--song", "ode_to_joy", "--out", str(tmp_path / "s")],
                  ["play", "--song", "ode_to_joy", "--out", str(tmp_path / "p")]):

@@ -1,6 +1,7 @@
-"""The left hand as a residual on the planner (`EnvConfig(feedforward=FF.LATEST)`, `motion/feedforward.py`): a zero residual
+"""The left hand as a residual on the planner (`EnvConfig(feedforward=True)`, `motion/feedforward.py`): a zero residual
 must play exactly as the scripted player does, and a training window must start in its planned state and read the
 plan frame by frame, or the feedforward belongs to other notes than the ones being played."""
+import json
 import os
 import signal
 import subprocess
@@ -14,9 +15,10 @@ import numpy as np
 import pytest
 
 from dexguitar import envs
+from dexguitar.errors import UserError
 from dexguitar.learn import policy as PO
 from dexguitar.motion import feedforward as FF
-from dexguitar.motion.planner import RIGHT_LATEST
+from dexguitar.motion import planner as PL
 from dexguitar.perform.scripted import ScriptedPlayer
 from dexguitar.music import cursor as CU
 from dexguitar.music import timeline as TL
@@ -37,8 +39,8 @@ def monkeypatch_module():
 
 
 def zero_residual(env, hand: str = "left") -> tuple[dict, PO.PolicySpec]:
-    spec = PO.PolicySpec("policy", hand, env.action_size, env.layout, feedforward=FF.LATEST if hand == "left" else 0,
-                         right_feedforward=RIGHT_LATEST if hand == "right" else 0)
+    spec = PO.PolicySpec("policy", hand, env.action_size, env.layout, feedforward=hand == "left",
+                         right_feedforward=hand == "right")
     params = PO.template(spec)
     params["obs_norm"]["var"] = np.ones_like(params["obs_norm"]["var"])
     return params, spec
@@ -57,12 +59,12 @@ def test_zero_residual_plays_as_the_scripted_player(plans):
 
 def test_right_zero_residual_plays_as_the_scripted_player(plans):
     """The right hand on its planner's feedforward (`EnvConfig.right_feedforward`), on 8-frame string crossings that
-    `right_mixed` and version 1 of the planner miss."""
+    `right_mixed` misses."""
     song = fast_lines()
     config = envs.EnvConfig().evaluation()
     scripted = ScriptedPlayer(envs.make("right", [TL.from_song(song)], config)).play(0)["right"]
     params, spec = zero_residual(envs.make("right", [TL.from_song(song)], config).env, "right")
-    assert spec.env_config(config).right_feedforward == RIGHT_LATEST and not spec.env_config(config).feedforward
+    assert spec.env_config(config).right_feedforward is True and not spec.env_config(config).feedforward
     played = evaluate(params, spec, [song])["fast lines"]["summary"]["right"]
     assert played["notes"] == len(song.notes)
     assert played["f1"] == pytest.approx(scripted["f1"], abs=1e-6)
@@ -71,7 +73,7 @@ def test_right_zero_residual_plays_as_the_scripted_player(plans):
 
 @pytest.mark.parametrize("hand", ["left", "right"])
 def test_window_starts_in_its_planned_state_and_reads_one_frame_per_step(plans, hand):
-    ff = {"feedforward": FF.LATEST} if hand == "left" else {"right_feedforward": RIGHT_LATEST}
+    ff = {"feedforward": True} if hand == "left" else {"right_feedforward": True}
     config = envs.EnvConfig(shift_prob=0.0, tempo_prob=0.0, **ff)
     env = envs.make(hand, FF.prepare(plans, config), config)
     core = env.env.env                                  # AutoReset(ChainWindows(LeftEnv))
@@ -107,19 +109,30 @@ def test_plans_come_from_the_disk_cache_the_second_time(plans, tmp_path, monkeyp
     again = FF.attach(TL.stack(plans), log=made.append)
     assert len(made) == 1                               # the second time: read, not planned
     capsys.readouterr()
-    FF.attach(TL.stack(plans), version=1)                                # another planner: another plan
+    FF.attach(TL.stack(plans), hand="right")                             # another planner: another plan
     out, err = capsys.readouterr()
     assert len(list(tmp_path.glob("*.npz"))) == 2
-    assert out == "" and err.startswith("planned the left hand for 1 song (")     # on stderr: `eval --json` prints
+    assert out == "" and err.startswith("planned the right hand for 1 song (")    # on stderr: `eval --json` prints
     assert err.rstrip().endswith(" on 1 process")                                # only JSON on stdout
     np.testing.assert_array_equal(np.asarray(first.plan.action), np.asarray(again.plan.action))
     assert first.plan.action.shape[1] >= FF.MIN_FRAMES and int(first.plan.frames[0]) > 0
     assert np.all(np.abs(np.asarray(first.plan.action)) <= 1.0)
+    # a plan made with other planner constants is not reused: the key holds them
+    notes = FF.song_notes(TL.stack(plans), 0, 5)
+    keys = {hand: FF._job_key(notes.left, notes.onset, hand, notes.pick) for hand in ("left", "right")}
+    duet = FF._job_key(notes.left, notes.onset, "right", notes.pick, after=True)
+    assert len({*keys.values(), duet}) == 3
+    monkeypatch.setattr(PL.ScriptedLeft, "open_clear", PL.ScriptedLeft.open_clear + 0.001)
+    assert FF._job_key(notes.left, notes.onset) != keys["left"]
+    assert FF._job_key(notes.left, notes.onset, "right", notes.pick) == keys["right"]
+    assert FF._job_key(notes.left, notes.onset, "right", notes.pick, after=True) != duet    # it waits for the left
+    monkeypatch.setattr(PL.ScriptedRight, "early_gap", PL.ScriptedRight.early_gap + 0.5)
+    assert FF._job_key(notes.left, notes.onset, "right", notes.pick) != keys["right"]
 
 
 def test_plans_are_made_with_one_blas_thread_even_for_one_song(monkeypatch):
-    """A plan depends on the BLAS thread count, so planning never runs in the calling process (whose BLAS keeps the
-    threads it started with): even a single job goes to a worker started with one thread."""
+    """Planning never runs in the calling process (whose BLAS keeps the threads it started with): even a single job
+    goes to a worker started with one BLAS thread, so that one process per core does the work."""
     monkeypatch.setenv("OPENBLAS_NUM_THREADS", "2")
     monkeypatch.setenv("OMP_NUM_THREADS", "2")
     out, used = FF.in_processes(os.getenv, ["OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"], workers=1)
@@ -133,9 +146,8 @@ def worker_pid(_) -> int:
 
 def test_a_kept_pool_plans_the_next_songs_in_the_same_workers_and_leaves_with_its_parent(tmp_path):
     """Planning reuses its worker processes between calls (a fresh worker costs seconds of imports and planner
-    set-up), except for the left planner before version 5, whose plans depend on what its worker solved before; a
-    kept worker that died is replaced; the workers of a process that leaves without shutting them down (`os._exit`, a
-    kill) leave too."""
+    set-up); a kept worker that died is replaced; the workers of a process that leaves without shutting them down
+    (`os._exit`, a kill) leave too."""
     first, _ = FF.in_processes(worker_pid, [None], workers=1, keep=True)
     again, _ = FF.in_processes(worker_pid, [None], workers=1, keep=True)
     fresh, _ = FF.in_processes(worker_pid, [None], workers=1)
@@ -144,8 +156,6 @@ def test_a_kept_pool_plans_the_next_songs_in_the_same_workers_and_leaves_with_it
     time.sleep(1.5)
     replaced, _ = FF.in_processes(worker_pid, [None], workers=1, keep=True)
     assert replaced != first
-    assert FF._reusable((None, None, None, 5)) and not FF._reusable((None, None, None, 4))
-    assert FF._reusable((None, None, None, 4, "right")) and not FF._reusable((None, None, None, 4, "left", None))
     script = tmp_path / "leave.py"
     script.write_text("import os\nfrom dexguitar.motion import feedforward as FF\n"
                       "def pid(_):\n    return os.getpid()\n"
@@ -165,9 +175,8 @@ def test_the_residual_flag_travels_with_the_policy():
     env = envs.make("left", [TL.from_song(melody())], envs.EnvConfig())
     _, spec = zero_residual(env.env)
     again = PO.PolicySpec.from_meta(spec.to_meta())
-    assert again.feedforward == FF.LATEST == again.env_config(envs.EnvConfig()).feedforward
-    legacy = dict(spec.to_meta(), feedforward=True)                   # the first residuals: planner version 1
-    assert PO.PolicySpec.from_meta(legacy).feedforward == 1
+    assert again.feedforward is True is again.env_config(envs.EnvConfig()).feedforward
+    assert spec.to_meta()["feedforward"] == PL.PLANNER_VERSION == 21            # what older releases read
     plain = PO.PolicySpec("policy", "left", env.action_size, env.layout)
     assert "feedforward" not in plain.to_meta() and not PO.PolicySpec.from_meta(plain.to_meta()).feedforward
     with pytest.raises(ValueError, match="no left hand"):
@@ -177,10 +186,58 @@ def test_the_residual_flag_travels_with_the_policy():
     right = envs.make("right", [TL.from_song(melody())], envs.EnvConfig())
     _, rspec = zero_residual(right.env, "right")
     again = PO.PolicySpec.from_meta(rspec.to_meta())
-    assert again.right_feedforward == RIGHT_LATEST and not again.feedforward
-    assert again.env_config(envs.EnvConfig(feedforward=FF.LATEST)) == envs.EnvConfig(right_feedforward=RIGHT_LATEST)
+    assert again.right_feedforward is True and not again.feedforward
+    assert rspec.to_meta()["right_feedforward"] == PL.RIGHT_PLANNER_VERSION == 4
+    assert again.env_config(envs.EnvConfig(feedforward=True)) == envs.EnvConfig(right_feedforward=True)
     assert "right_feedforward" not in spec.to_meta()
     with pytest.raises(ValueError, match="no right hand"):
-        envs.make("left", [TL.from_song(melody())], envs.EnvConfig(right_feedforward=RIGHT_LATEST))
+        envs.make("left", [TL.from_song(melody())], envs.EnvConfig(right_feedforward=True))
     with pytest.raises(ValueError, match="feedforward.prepare"):
-        envs.make("right", [TL.from_song(melody())], envs.EnvConfig(right_feedforward=RIGHT_LATEST))
+        envs.make("right", [TL.from_song(melody())], envs.EnvConfig(right_feedforward=True))
+
+
+def test_a_policy_on_a_planner_version_this_release_no_longer_has_is_refused(tmp_path):
+    """`policy.json` holds the planner's version number: 21 (left) and 4 (right) load as residuals on the planner;
+    any other (true was version 1) is refused in one line naming the file, which asks for a newer export."""
+    from dexguitar.cli import POLICIES
+    env = envs.make("left", [TL.from_song(melody())], envs.EnvConfig())
+    meta = zero_residual(env.env)[1].to_meta()
+    right = zero_residual(envs.make("right", [TL.from_song(melody())], envs.EnvConfig()).env, "right")[1].to_meta()
+    for name, m in (("left21", dict(meta, feedforward=21)), ("right4", dict(right, right_feedforward=4)),
+                    ("plain", {k: v for k, v in meta.items() if k != "feedforward"})):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "policy.json").write_text(json.dumps(m))
+        spec = PO.PolicySpec.from_meta(PO.read_meta(tmp_path / name))
+        assert (spec.feedforward, spec.right_feedforward) == {"left21": (True, False), "right4": (False, True),
+                                                              "plain": (False, False)}[name]
+    for name, m in (("left9", dict(meta, feedforward=9)), ("left_true", dict(meta, feedforward=True)),
+                    ("right3", dict(right, right_feedforward=3))):
+        (tmp_path / name).mkdir()
+        path = tmp_path / name / "policy.json"
+        path.write_text(json.dumps(m))
+        with pytest.raises(UserError) as err:
+            PO.read_meta(tmp_path / name)
+        message = str(err.value)
+        assert message.startswith(f"{path}: ") and "\n" not in message
+        assert "trained on a planner version this release no longer has" in message
+        assert "only the left planner of version 21 and the right planner of version 4" in message
+        assert "newer export" in message
+    assert '("feedforward": 9)' in str(pytest.raises(UserError, PO.read_meta, tmp_path / "left9").value)
+    # the shipped residuals: left on version 21, right on version 4, a synchronizer of a left one on 21
+    for name, flags in (("left_general", (True, False)), ("right_general", (False, True)),
+                        ("gsync_snow", (True, False))):
+        spec = PO.PolicySpec.from_meta(PO.read_meta(POLICIES / name))
+        assert (spec.feedforward, spec.right_feedforward) == flags, name
+
+
+def test_a_run_recorded_with_the_planner_version_resumes_on_the_planner():
+    """A run's config.json may hold the planner's version number as `env.feedforward` (21) or
+    `env.right_feedforward` (4): resumed, it trains on the planner; a run on another version cannot go on."""
+    from dexguitar.errors import RunError
+    from dexguitar.learn.run import planner_flags
+    recorded = {"feedforward": 21, "right_feedforward": 4, "mirror": False}
+    assert planner_flags(recorded) == {"feedforward": True, "right_feedforward": True, "mirror": False}
+    assert planner_flags({"feedforward": True, "right_feedforward": 0}) == {"feedforward": True,
+                                                                             "right_feedforward": False}
+    with pytest.raises(RunError, match="run/config.json: made on a planner version this release no longer has"):
+        planner_flags({"feedforward": 9}, "run/config.json")

@@ -68,7 +68,7 @@ def test_a_left_hand_from_scratch_and_the_default_warm_start(recorder, tmp_path)
     assert recorder.calls[-1]["init_from"] is None
     default = P.Recipe()
     assert default.left_init.endswith("models/policies/left_official15")
-    assert default.left_config.endswith("experiments/left_finetune.py")
+    assert default.left_config == "left_finetune"                       # dexguitar/configs/left_finetune.py
     P.Songbook(tmp_path, "b", ["ode_to_joy"], default, log=lambda m: None).run("left")
     assert recorder.calls[-1]["init_from"] == default.left_init
 
@@ -191,3 +191,33 @@ def test_the_minutes_of_a_stage_count_its_judgements(tmp_path):
     (run / "metrics.jsonl").write_text(json.dumps({"seconds": 30.0, "compile_s": 15.0}) + "\n")
     (run / "judge.json").write_text(json.dumps({"best": None, "history": [], "seconds": 15.0}))
     assert P._spent(run) == pytest.approx(1.0)
+
+
+def test_each_stage_trains_with_its_config_and_overrides(recorder, monkeypatch, tmp_path):
+    """`songs --set` reaches every stage, `--set-<stage>` its own; a stage's config is a name in dexguitar/configs/."""
+    from dexguitar import cli
+    seen = {}
+
+    def fake_run_songs(tabs, out, recipe, per_song):
+        seen["recipe"] = recipe
+        (tmp_path / "songs.md").write_text("")
+        return [{}]
+    monkeypatch.setattr(cli.pipeline, "run_songs", fake_run_songs)
+    assert cli.main(["songs", "ode_to_joy", "--out", str(tmp_path), "--set", "seed=3", "--set-sync",
+                     "env.hold_reward=0.5", "--set-sync", "actor_warmup=7"]) == 0
+    recipe = seen["recipe"]
+    assert recipe.left_set == recipe.right_set == ("seed=3",)
+    assert recipe.sync_set == ("seed=3", "env.hold_reward=0.5", "actor_warmup=7")
+    built = {}
+    monkeypatch.setattr(P, "Trainer", lambda cfg, songs, ref, env: built.update(left=(cfg, env)))
+    monkeypatch.setattr(P, "SyncTrainer", lambda cfg, songs, ref, left, right, env: built.update(sync=(cfg, env)))
+    book = P.Songbook(tmp_path / "out", "g", ["ode_to_joy"], recipe, log=lambda m: None)
+    book.run("left")
+    book.run("sync")
+    cfg, env = built["left"]
+    assert (cfg.hand, cfg.seed, cfg.actor_warmup, cfg.clip, env.shift_prob) == ("left", 3, 25, 0.3, 0.0)   # finetune
+    cfg, env = built["sync"]
+    assert (cfg.hand, cfg.seed, cfg.actor_warmup, env.hold_reward) == ("duet", 3, 7, 0.5)
+    with pytest.raises(P.UserError, match="--set clip=high: config left_finetune: TrainConfig.clip is a number"):
+        P.Songbook(tmp_path / "out2", "g", ["ode_to_joy"], P.Recipe(left_set=("clip=high",)),
+                   log=lambda m: None).run("left")

@@ -40,9 +40,9 @@ def perturb(monkeypatch, seed: int) -> None:
 
 def test_rounding_sized_perturbations_change_no_decision(monkeypatch):
     """`SONATA_BARRE`: a barre chosen over fingerings that do not hold, and the ring finger across two strings chosen
-    above it, by trials in simulation. With the IK of the versions before `CONVERGED`, which stops at a relative cost
-    tolerance, two CPUs' barre hands are 0.2 rad apart, `1 x x 3 3 1` holds on one of them only, and these
-    perturbations move the motion by more than 1 rad; converged, by about 1e-7."""
+    above it, by trials in simulation. An IK stopped at a relative cost tolerance put two CPUs' barre hands 0.2 rad
+    apart, `1 x x 3 3 1` held on one of them only, and these perturbations moved the motion by more than 1 rad;
+    solved to convergence, they move it by about 1e-7."""
     plan, (desired, q) = decisions(SONATA_BARRE)
     assert plan[0][0][3] == (P.BARRE_POSITIONS + 1, {0: (P.BARRE, 1), 2: (P.PAIR + 1, 3)})
     for seed in (1, 2):

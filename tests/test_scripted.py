@@ -9,7 +9,7 @@ import pytest
 
 from dexguitar import envs
 from dexguitar.motion import feedforward as FF
-from dexguitar.motion.planner import (BARRE, BARRE_POSITIONS, FINGER_DOFS, LATEST, PAIR, Notes, ScriptedLeft,
+from dexguitar.motion.planner import (BARRE, BARRE_POSITIONS, FINGER_DOFS, PAIR, WRIST_THUMB, Notes, ScriptedLeft,
                                       ScriptedRight)
 from dexguitar.perform.scripted import ScriptedPlayer
 from dexguitar.music import timeline as TL
@@ -77,19 +77,16 @@ def test_fingering_one_finger_per_fret(timeline):
     for i, ((p, fingers), (string, fret)) in enumerate(zip(plan, MELODY)):
         rule = {fret - p: (string - 1, fret)} if fret > 0 else {}
         assert {f: v for f, v in fingers.items() if f in rule} == rule
-        # version 17: in the trill 1-3-1 on string 1 (notes 4-6) the index stays down on fret 1 under the 3
+        # in the trill 1-3-1 on string 1 (notes 4-6) the index stays down on fret 1 under the 3 (`anchored`)
         assert {f: v for f, v in fingers.items() if f not in rule} == ({0: (0, 1)} if i == 5 else {})
 
 
 def test_pick_strokes_alternate_on_one_string(timeline):
     notes = Notes(np.asarray(timeline.left), np.asarray(timeline.pick), np.asarray(timeline.onset))
-    segs, _ = ScriptedRight(1).strokes(notes)
-    strokes = [np.sign(x1 - x0) for _, _, x0, x1, kind in segs if kind[0] == "stroke"]
-    sweeps = [np.sign(s.end - s.start) for s in ScriptedRight(2).sweeps(notes)[0]]
-    for way in (strokes, sweeps):
-        assert len(way) == len(MELODY)
-        # notes 4-6 repeat string 1: down, up, down (or the reverse)
-        assert way[4] == -way[5] == way[6]
+    way = [np.sign(s.end - s.start) for s in ScriptedRight().sweeps(notes)[0]]
+    assert len(way) == len(MELODY)
+    # notes 4-6 repeat string 1: down, up, down (or the reverse)
+    assert way[4] == -way[5] == way[6]
 
 
 def fast_lines() -> Song:
@@ -113,20 +110,13 @@ def planned_crossings(right: ScriptedRight, tl) -> tuple[np.ndarray, Notes]:
     return np.stack([picked[a:b].sum(0) for a, b in zip(notes.onset[:-1], notes.onset[1:])]), notes
 
 
-@pytest.mark.filterwarnings("ignore:note .* the pick cannot reach")
-def test_version_2_picks_fast_lines_note_by_note():
+def test_the_pick_crosses_fast_lines_note_by_note():
     tl = TL.from_song(fast_lines())
     assert set(np.diff(np.asarray(tl.onset)[:int(tl.n_notes) + 1])) == {8}
-    counts, notes = planned_crossings(ScriptedRight(2), tl)
+    counts, notes = planned_crossings(ScriptedRight(), tl)
     np.testing.assert_array_equal(counts, notes.pick)          # each note's string once, and no other string
-    old, _ = planned_crossings(ScriptedRight(1), tl)           # version 1: strokes + travels did not fit 8 frames
-    assert (old != notes.pick).any(axis=1).sum() >= 20
     env = envs.make("right", [tl], envs.EnvConfig().evaluation())
-    player = ScriptedPlayer(env)
-    player.right = ScriptedRight(2)
-    assert player.play(0)["right"]["f1"] >= 0.95                # and the simulated hand follows it
-    player.right = ScriptedRight(1)
-    assert player.play(0)["right"]["f1"] < 0.5                  # 0.22 measured
+    assert ScriptedPlayer(env).play(0)["right"]["f1"] >= 0.95      # and the simulated hand follows it
 
 
 def quick_strums() -> Song:
@@ -139,29 +129,23 @@ def quick_strums() -> Song:
     return Song(tempo=150, notes=(chord(0, "1/2"), *bar * 3, chord(3, "1/2")), title="quick strums")
 
 
-def test_version_3_strums_so_that_the_left_hand_holds_each_string_long_enough():
+def test_strums_so_that_the_left_hand_holds_each_string_long_enough():
+    """In the duet each stroke is fitted to the planned left hand (`ScriptedRight.fit`): alternating strokes would
+    pick string 1 last in every down-stroke, in a 6-frame note too late for its press to last 2/3 of the note from
+    the pick; the fitted strokes pick at most one string too late, and both hands play the song in time."""
     tl = TL.from_song(quick_strums())
     env = envs.make("duet", [tl], envs.EnvConfig().evaluation())
     player = ScriptedPlayer(env)
     notes = Notes.from_window(env.sample_window(jax.random.PRNGKey(0), 0))
-    (_, q), = FF.plan_all([(notes.left, notes.pick, notes.onset, LATEST)], log=lambda m: None)
+    (_, q), = FF.plan_all([(notes.left, notes.pick, notes.onset)], log=lambda m: None)
     timing = player.left.timing(notes, q)
-
-    def short(version):
-        """Per stroke of the plan, its strings that would be picked too late for the planned left hand's press."""
-        right = ScriptedRight(version)
-        return np.array([right.short_holds(notes, timing, s.note, *np.flatnonzero(notes.pick[s.note])[[0, -1]],
-                                           s.cross, s.start > s.end, s.frames) for s in right.sweeps(notes, timing)[0]])
-    # version 2 alternates its strokes: every down-stroke picks string 1 last, in a 6-frame note too late
-    v2, v3 = short(2), short(3)
-    assert v2.sum() >= 6 and v3.sum() <= 1
-    scores = {}
-    for version in (2, 3):
-        player.right = ScriptedRight(version)
-        result = player.play(0)
-        assert result["left"]["f1"] == result["right"]["f1"] == 1.0          # each hand plays every note ...
-        scores[version] = result["both"]["f1"]
-    assert scores[3] >= 0.95 and scores[2] <= 0.9                            # ... but in time only so (0.983, 0.883)
+    right = ScriptedRight()
+    short = [right.short_holds(notes, timing, s.note, *np.flatnonzero(notes.pick[s.note])[[0, -1]], s.cross,
+                               s.start > s.end, s.frames) for s in right.sweeps(notes, timing)[0]]
+    assert sum(short) <= 1
+    result = player.play(0)
+    assert result["left"]["f1"] == result["right"]["f1"] == 1.0              # each hand plays every note ...
+    assert result["both"]["f1"] >= 0.95                                      # ... and in time
 
 
 def tracked_presses(hand, notes) -> np.ndarray:
@@ -182,86 +166,61 @@ def strings_held(press, goal, onset, i: int) -> int:
     return int(np.sum(ok[goal[i] > 0]))
 
 
-def fingering_and_held(version: int, notes):
-    """A planner version's fingering of `notes` after the opening rest, and per note how many of its pressed strings
-    the tracked motion holds for 2/3 of it (`strings_held`)."""
-    hand = ScriptedLeft(version=version)
+def fingering_and_held(notes):
+    """The planner's fingering of `notes` after the opening rest, and per note how many of its pressed strings the
+    tracked motion holds for 2/3 of it (`strings_held`)."""
+    hand = ScriptedLeft()
     press = tracked_presses(hand, notes)
     return hand.fingering(notes)[1:], [strings_held(press, notes.left, notes.onset, i) for i in range(1, notes.n)]
 
 
-def test_a_chord_the_rule_cannot_hold_gets_a_searched_fingering():
+def test_a_chord_the_rule_cannot_hold_gets_another_fingering():
     """Strings 3 and 4 at fret 2 right after a note at fret 1 (come_as_you_are, note 51): the one-finger-per-fret
-    rule keeps position 1 and sends the ring finger back from its own fret 3, where the middle finger is in its way;
-    the searched fingering plays the chord. Judged on the whole tracked motion in MuJoCo C (not the search's own
-    short trial): the chord's strings pressed at fret 2, string 5 open, for 2/3 of the note."""
+    rule keeps position 1 and sends the ring finger back from its own fret 3, where the middle finger is in its way,
+    and the chord does not hold in the planner's trial; the middle finger across both strings does. Judged on the
+    whole tracked motion in MuJoCo C (not the planner's own short trial): the chord's strings pressed at fret 2,
+    string 5 open, for 2/3 of the note."""
     goal = np.array([[0, 0, 0, 0, 1, 0], [0, 0, 2, 2, -1, 0]])     # timeline goals: k press, -1 open, 0 free
     notes = Notes(goal, goal != 0, np.array([0, 30, 60]))
-
-    def held(hand):
-        press = tracked_presses(hand, notes)[31:61]                 # the states during the chord's 30 frames
-        return np.mean((press[:, 2] == 2) & (press[:, 3] == 2) & (press[:, 4] == 0))
-
-    rule, searched = ScriptedLeft(version=1), ScriptedLeft()
-    assert rule.fingering(notes)[1] == (1, {1: (3, 2), 2: (2, 2)})
-    assert searched.fingering(notes)[1] != rule.fingering(notes)[1]
-    assert held(rule) < 2 / 3
-    assert held(searched) >= 2 / 3
+    hand = ScriptedLeft()
+    plan = hand.fingering(notes)
+    rule = hand.rule([(2, -3), (2, -2)], 1)
+    assert rule == (1, {1: (3, 2), 2: (2, 2)}) and not hand.holds(*rule, goal[1], plan[0])
+    assert plan[1] == (1, {1: (PAIR + 2, 2)})
+    press = tracked_presses(hand, notes)[31:61]                     # the states during the chord's 30 frames
+    assert np.mean((press[:, 2] == 2) & (press[:, 3] == 2) & (press[:, 4] == 0)) >= 2 / 3
 
 
-def test_version_3_is_quicker_between_short_notes_only(timeline):
-    """Planner version 3 lifts and lands fingers faster between notes shorter than 7 frames (flight_of_the_bumblebee1:
-    5-frame notes, left F1 0.49 -> 0.75 zero-shot); every motion around longer notes is version 2's."""
-    notes = Notes(np.asarray(timeline.left), np.asarray(timeline.pick), np.asarray(timeline.onset))   # 15 frames
-    np.testing.assert_array_equal(ScriptedLeft(3).desired(notes), ScriptedLeft(2).desired(notes))
-    fast = Notes(notes.left, notes.pick, np.concatenate([[0], 10 + 5 * np.arange(1, notes.n + 1)]))
-    v2, v3 = ScriptedLeft(2).desired(fast), ScriptedLeft(3).desired(fast)
-    assert not np.allclose(v2, v3)
-    from dexguitar.motion.planner import LATEST
-    with pytest.raises(ValueError, match=f"no left planner version {LATEST + 1}"):
-        ScriptedLeft(LATEST + 1)
-
-
-def test_version_4_presses_each_note_by_its_onset(timeline):
-    """Planner version 4 leads every change by 2 frames on 15-frame notes (the slack of the note before beyond its
-    2/3 and 2 more), so a right hand that picks at the onset finds the string pressed; version 3 pressed 2 frames
-    into the note, and a pick there was "picked before the press" (the duet gap, official_songs.md). Judged on the
-    tracked MuJoCo C motion: the first frame, counted from each note's onset, at which its frets are all pressed."""
+def test_presses_each_note_by_its_onset(timeline):
+    """Every change between two notes leads the onset by up to 2 frames, into the slack of the note before beyond
+    its 2/3, so a right hand that picks at the onset finds the string pressed. Judged on the tracked MuJoCo C motion:
+    the first frame, counted from each note's onset, at which its frets are all pressed."""
     notes = Notes(np.asarray(timeline.left), np.asarray(timeline.pick), np.asarray(timeline.onset))
-
-    def first_pressed(version):
-        press = tracked_presses(ScriptedLeft(version), notes)
-        out = []
-        for i in range(1, notes.n):
-            goal = notes.left[i]
-            if (goal > 0).any():
-                frames = range(notes.onset[i] - 6, notes.onset[i + 1])
-                out.append(next(j - notes.onset[i] for j in frames
-                                if np.all((press[j] == goal)[goal > 0])))
-        return np.array(out)
-
-    v3, v4 = first_pressed(3), first_pressed(4)
-    assert np.all(v4 <= 0) and np.any(v3 > 0)
-    np.testing.assert_array_equal(v4, v3 - 2)
+    press = tracked_presses(ScriptedLeft(), notes)
+    first = []
+    for i in range(1, notes.n):
+        goal = notes.left[i]
+        if (goal > 0).any():
+            frames = range(notes.onset[i] - 6, notes.onset[i + 1])
+            first.append(next(j - notes.onset[i] for j in frames if np.all((press[j] == goal)[goal > 0])))
+    assert len(first) == 11 and max(first) <= 0
 
 
-def test_a_six_string_chord_gets_the_four_strings_that_hold():
-    """Four fingers cannot press six strings (no barre). Version 5 tries fingerings of any four of them, from the note
-    before, and keeps the one that holds the most (snow's repeated chord, 9-frame notes); version 4 kept the rule's
-    four lowest frets, of which three held. Judged on the tracked motion: strings at their fret for 2/3 of a note."""
+def test_a_six_string_chord_is_held_with_two_pairs():
+    """Four fingers cannot press six strings one each: snow's repeated chord 9 11 11 9 9 11 (strings 6..1, 9-frame
+    notes) takes two fingers across two strings each (`PAIR`) and two single ones, and the tracked motion holds all
+    six strings for 2/3 of the note."""
     goal = np.array([[0, 0, 0, 11, 11, 9]] + [[11, 9, 9, 11, 11, 9]] * 3)
     notes = Notes(goal, goal != 0, np.arange(5) * 9)
-
-    def held(version):
-        press = tracked_presses(ScriptedLeft(version=version), notes)[19:28]      # the third note's 9 states
-        return int(np.sum(3 * np.sum(press == goal[2], axis=0) >= 2 * 9))
-    assert held(5) == 4 and held(4) == 3
+    hand = ScriptedLeft()
+    assert hand.fingering(notes)[2] == (8, {0: (5, 9), 1: (PAIR + 1, 9), 2: (0, 11), 3: (PAIR + 3, 11)})
+    press = tracked_presses(hand, notes)[19:28]                     # the third note's 9 states
+    assert int(np.sum(3 * np.sum(press == goal[2], axis=0) >= 2 * 9)) == 6
 
 
 def test_a_plan_does_not_depend_on_what_was_planned_before():
-    """From version 5 the hand positions' IK starts from a fixed chain (from the home position outwards), not from
-    whichever position was solved last, so that a song's plan is the same alone and after another song in the same
-    worker (version 4 differed by up to 0.06 rad here)."""
+    """The hand positions' IK starts from a fixed chain (from the home position outwards), not from whichever
+    position was solved last, so that a song's plan is the same alone and after another song in the same worker."""
     low = Notes(np.array([[0, 0, 2, 0, 0, 0], [0, 0, 0, 3, 0, 0]]), np.eye(6, dtype=bool)[[2, 3]],
                 np.array([0, 20, 40]))
     high = Notes(np.array([[0, 0, 12, 0, 0, 0]]), np.eye(6, dtype=bool)[[2]], np.array([0, 20]))
@@ -271,263 +230,203 @@ def test_a_plan_does_not_depend_on_what_was_planned_before():
     np.testing.assert_array_equal(after.desired(low), alone)
 
 
-def test_version_6_keeps_fingers_from_jumping_between_short_notes():
+def test_fingers_do_not_jump_between_short_notes():
     """Fret 3 on strings 2 and 4 in turn, 8-frame notes (capriccio_op59_no16, notes 26-28): the one-finger-per-fret
-    rule gives both to the ring finger, which must lift, cross two strings and land within the boundary, and the
-    note is then pressed for less than 2/3 of it. Version 6 gives string 4 to the middle finger (one fret of stretch)
-    and both notes hold. Judged on the tracked motion in MuJoCo C."""
+    rule gives both to the finger of fret 3, which would have to lift, cross two strings and land within the
+    boundary, and the note would then be pressed for less than 2/3 of it. Another finger takes string 4, and both
+    notes hold on the tracked motion in MuJoCo C."""
     s2, s4 = [0, 3, 0, 0, 0, 0], [0, 0, 0, 3, 0, 0]
     goal = np.array([[0, 0, 0, 2, 0, 0], s2, s4, s2, s4])
     onset = np.array([0, 20, 28, 36, 44, 52])
     notes = Notes(goal, goal != 0, onset)
-
-    def plan_and_held(version):
-        hand = ScriptedLeft(version=version)
-        press = tracked_presses(hand, notes)
-        return [fingers for _, fingers in hand.fingering(notes)], [strings_held(press, goal, onset, i) for i in (2, 3)]
-    plan5, held5 = plan_and_held(5)
-    plan6, held6 = plan_and_held(6)
-    assert plan5[1] == {2: (1, 3)} and plan5[2] == {2: (3, 3)} and held5 == [0, 0]
-    assert plan6[1] == {2: (1, 3)} and plan6[2] == {1: (3, 3)} and held6 == [1, 1]
+    hand = ScriptedLeft()
+    plan, held = fingering_and_held(notes)                   # notes 1-4
+    before, (p, fingers) = plan[0], plan[1]                  # notes 1 (string 2) and 2 (string 4)
+    assert hand.hurried(notes, 2) and hand.jumps(before, *hand.rule([(3, -3)], p))
+    assert before[0] == p and [before[1], fingers] == [{1: (1, 3)}, {0: (3, 3)}]
+    assert held[1:3] == [1, 1]
 
 
-def test_version_7_presses_a_double_stop_with_one_finger():
+def test_a_double_stop_is_pressed_with_one_finger():
     """Strings 1 and 2 together at fret 5, then at fret 6, 8-frame notes (johnny_b_goodie's double stops). One
     finger's axis midway between two neighbouring strings is within the press distance of both (about 4 mm of 6), so
-    version 7 plays each with one finger across the pair; version 6 gives each string a finger, and the alternating
-    pairs lose strings. Judged on the tracked motion in MuJoCo C: strings at their fret for 2/3 of a note."""
-    from dexguitar.motion.planner import PAIR
+    each is played with one finger across the pair. Judged on the tracked motion in MuJoCo C: strings at their fret
+    for 2/3 of a note."""
     goal = np.array([[0] * 6] + [[5, 5, 0, 0, 0, 0], [6, 6, 0, 0, 0, 0]] * 3)
     onset = np.concatenate([[0], 20 + np.arange(7) * 8])
-    notes = Notes(goal, goal != 0, onset)
-
-    def held(version):
-        press = tracked_presses(ScriptedLeft(version=version), notes)
-        return [strings_held(press, goal, onset, i) for i in range(1, len(goal))]
-    assert [set(f.values()) for _, f in ScriptedLeft(version=7).fingering(notes)[1:3]] == [{(PAIR, 5)}, {(PAIR, 6)}]
-    assert held(7) == [2] * 6
-    assert sum(held(6)) < 12
+    plan, held = fingering_and_held(Notes(goal, goal != 0, onset))
+    assert [set(f.values()) for _, f in plan[:2]] == [{(PAIR, 5)}, {(PAIR, 6)}]
+    assert held == [2] * 6
 
 
-def test_version_8_plans_hand_positions_for_the_whole_line():
-    """Frets 6, 7, 6, 8, 7 on strings 3 and 2, 5- and 10-frame notes (johnny_b_goodie's opening). The rule moves the
-    hand only when a note leaves its position, by the least amount: positions 3, 4, 5, a slow wrist move at three of
-    the notes, and the third note is lost. Version 8 chooses positions for the whole song with as few moves as
-    cover it: position 5 holds them all, and every note is held on the tracked motion."""
+def test_hand_positions_are_planned_for_the_whole_line():
+    """Frets 6, 7, 6, 8, 7 on strings 3 and 2, 5- and 10-frame notes (johnny_b_goodie's opening). Moving the hand only
+    when a note leaves its position, by the least amount, would go through positions 3, 4 and 5, a slow wrist move at
+    three of the notes. Positions are chosen for the whole song with as few moves as cover it: position 5 holds them
+    all, and every note is held on the tracked motion."""
     goal = np.array([[0] * 6, [0, 0, 6, 0, 0, 0], [0, 0, 7, 0, 0, 0], [0, 6, 0, 0, 0, 0], [0, 8, 0, 0, 0, 0],
                      [0, 0, 7, 0, 0, 0]])
     onset = np.array([0, 20, 25, 30, 40, 50, 60])
-    notes = Notes(goal, goal != 0, onset)
-
-    def plan_and_held(version):
-        hand = ScriptedLeft(version=version)
-        press = tracked_presses(hand, notes)
-        return [p for p, _ in hand.fingering(notes)[1:]], [strings_held(press, goal, onset, i) for i in range(1, 6)]
-    assert plan_and_held(7) == ([3, 4, 4, 5, 5], [1, 1, 0, 1, 1])
-    assert plan_and_held(8) == ([5] * 5, [1] * 5)
+    plan, held = fingering_and_held(Notes(goal, goal != 0, onset))
+    assert [p for p, _ in plan] == [5] * 5 and held == [1] * 5
 
 
-def test_version_9_searches_the_fingerings_with_a_pair():
+def test_the_fingerings_with_a_pair_are_searched():
     """Strings 2, 3 and 4 at fret 2 with string 5 open (come_as_you_are, note 52), in position 1. The rule puts the
-    pair of strings 3 and 4 on the middle finger and string 2 on the ring finger, which does not hold in the trial, so
-    version 8 falls back to three fingers, of which two hold. Version 9 searches the fingerings with the pair,
-    cheapest first: the index across the pair and the middle finger on string 2 hold all three strings on the tracked
-    motion."""
-    from dexguitar.motion.planner import PAIR
+    pair of strings 3 and 4 on the middle finger and string 2 on the ring finger, which does not hold in the trial;
+    of the fingerings with the pair, cheapest first, the index across the pair and the middle finger on string 2
+    hold all three strings on the tracked motion."""
     chord = [0, 2, 2, 2, -1, 0]
     goal = np.array([[0] * 6, chord, chord])
     onset = np.array([0, 20, 50, 80])
     notes = Notes(goal, goal > 0, onset)
-
-    def held(version):
-        hand = ScriptedLeft(version=version)
-        press = tracked_presses(hand, notes)
-        return hand.fingering(notes)[1][1], [strings_held(press, goal, onset, i) for i in (1, 2)]
-    assert held(8) == ({0: (3, 2), 1: (2, 2), 2: (1, 2)}, [2, 2])
-    assert held(9) == ({0: (PAIR + 2, 2), 1: (1, 2)}, [3, 3])
+    hand = ScriptedLeft()
+    rule = hand.rule([(2, -(PAIR + 2)), (2, -1)], 1)
+    assert rule == (1, {1: (PAIR + 2, 2), 2: (1, 2)}) and not hand.holds(*rule, goal[1])
+    plan, held = fingering_and_held(notes)
+    assert plan[0][1] == {0: (PAIR + 2, 2), 1: (1, 2)} and held == [3, 3]
 
 
-def test_version_10_reaches_a_first_note_that_comes_at_once():
+def test_a_first_note_that_comes_at_once_is_reached():
     """beethoven_virus opens with fret 9 on string 3 for 12 frames right after the 5-frame rest, two frets above the
-    home position. Version 9 takes 10 frames from the home pose to the first position and holds the note for less than
-    2/3 of it; version 10 ends that move by the first onset. A song whose first note comes 10 frames later or more, or
-    lies far up the neck (canon_in_d_major1: fret 17, where the wrist lags a quick move), plans exactly as before."""
+    home position: the first move from the home pose ends by the first onset (`first_frames`), not after
+    `start_frames`, and the tracked motion holds every note."""
     goal = np.array([[0] * 6, [0, 0, 9, 0, 0, 0], [0, 10, 0, 0, 0, 0], [7, 0, 0, 0, 0, 0], [8, 0, 0, 0, 0, 0]])
     onset = np.array([0, 5, 17, 29, 41, 53])                      # beethoven_virus's first notes, as the env plans them
     notes = Notes(goal, goal > 0, onset)
-    held = {v: [strings_held(tracked_presses(ScriptedLeft(version=v), notes), goal, onset, i) for i in range(1, 5)]
-            for v in (9, 10)}
-    assert held == {9: [0, 1, 1, 1], 10: [1, 1, 1, 1]}
-    later = Notes(goal, goal > 0, np.r_[0, onset[1:] + 5])
-    far = Notes(np.where(goal > 0, goal + 8, 0), goal > 0, onset)
-    for same in (later, far):
-        np.testing.assert_array_equal(ScriptedLeft(10).desired(same), ScriptedLeft(9).desired(same))
+    plan, held = fingering_and_held(notes)
+    assert [p for p, _ in plan] == [7] * 4 and held == [1, 1, 1, 1]
+    q = ScriptedLeft().desired(notes)               # the wrist and thumb: in position 7 by the first onset, and stay
+    assert np.ptp(q[5:, WRIST_THUMB], axis=0).max() == 0 and np.abs(q[4, WRIST_THUMB] - q[5, WRIST_THUMB]).max() > 0
 
 
-def test_version_11_shifts_the_hand_quickly_between_short_notes():
+def test_the_hand_shifts_quickly_between_short_notes():
     """Two 9-frame notes at fret 3, then two at fret 10 and back, on string 2 (snow and beethoven_virus move the hand
-    like this). Version 10 slides the wrist over 10 frames centred on the change (led by a frame), which eats up to 6
-    frames of a 9-frame note beside it: on the tracked motion the note before the move back loses its 2/3. Version 11
-    moves in 2 * (9 - 6) + 2 = 8 frames there and every note holds. Notes of 15 frames or more move as before."""
+    like this). A shift of `shift_frames` (10) would eat up to 6 frames of a 9-frame note beside it; between such
+    notes it takes 2 * (9 - 6) + 2 = 8 frames, and every note holds on the tracked motion."""
     line = [3, 3, 10, 10, 3, 3]
     goal = np.array([[0] * 6] + [[0, k, 0, 0, 0, 0] for k in line])
     onset = np.r_[0, 20 + 9 * np.arange(len(line) + 1)]
-    notes = Notes(goal, goal > 0, onset)
-    held = {v: [strings_held(tracked_presses(ScriptedLeft(version=v), notes), goal, onset, i)
-                for i in range(1, len(line) + 1)] for v in (10, 11)}
-    assert held == {10: [1, 1, 1, 0, 1, 1], 11: [1] * len(line)}
-    slow = Notes(goal, goal > 0, np.r_[0, 20 + 15 * np.arange(len(line) + 1)])
-    np.testing.assert_array_equal(ScriptedLeft(11).desired(slow), ScriptedLeft(10).desired(slow))
+    plan, held = fingering_and_held(Notes(goal, goal > 0, onset))
+    assert [p for p, _ in plan] == [3, 3, 7, 7, 3, 3] and held == [1] * len(line)
 
 
-def test_version_12_bars_a_fret_with_the_index():
+def test_a_fret_is_barred_with_the_index():
     """Strings 1, 2 and 6 at fret 1 with string 3 at fret 2 (sonata_in_f_major_ms84_no14, notes 70-73), then two
-    notes that keep string 6 at fret 1. One finger per string cannot play the chord: on the tracked motion version 11
-    holds one of its four strings. Version 12 lays the index across all six strings at fret 1 in a hand pose of its
-    own, the middle finger on string 3, keeps the barre for the next two notes, and every string holds."""
-    from dexguitar.motion.planner import BARRE, BARRE_POSITIONS
+    notes that keep string 6 at fret 1. One finger per string cannot play the chord: the index lies across all six
+    strings at fret 1 in a hand pose of its own, the middle finger on string 3, the barre stays for the next two
+    notes, and every string holds."""
     chord = [1, 1, 2, 0, 0, 1]
     goal = np.array([[0] * 6, chord, [0, 1, 0, 0, 0, 1], [0, 0, 2, 0, 0, 1], chord])
     onset = np.array([0, 20, 50, 65, 80, 110])
-    notes = Notes(goal, goal > 0, onset)
-    plan11, held11 = fingering_and_held(11, notes)
-    plan12, held12 = fingering_and_held(12, notes)
-    assert held11 == [1, 1, 2, 1]
+    plan, held = fingering_and_held(Notes(goal, goal > 0, onset))
     barre = BARRE_POSITIONS + 1
-    assert plan12 == [(barre, {0: (BARRE, 1), 1: (2, 2)}), (barre, {0: (BARRE, 1)}),
-                      (barre, {0: (BARRE, 1), 1: (2, 2)}), (barre, {0: (BARRE, 1), 1: (2, 2)})]
-    assert held12 == [4, 2, 2, 4]
+    assert plan == [(barre, {0: (BARRE, 1), 1: (2, 2)}), (barre, {0: (BARRE, 1)}),
+                    (barre, {0: (BARRE, 1), 1: (2, 2)}), (barre, {0: (BARRE, 1), 1: (2, 2)})]
+    assert held == [4, 2, 2, 4]
 
 
-def test_version_13_keeps_a_chord_down_over_its_partial_strum():
+def test_a_chord_stays_down_over_its_partial_strum():
     """snow, notes 47-51: the chord 7 9 9 8 7 7 (strings 6..1) twice, then only its strings 6-4 twice, then the
-    next chord. Version 12 fingers the partial strum afresh in the same hand position (index to string 6, ring to
-    strings 5-4): every finger lifts and lands again at the boundary, and the tracked motion holds 3 of the last
-    chord's 6 strings and 2 of the partial's 3. Version 13 keeps the chord's fingering, which already plays the
-    partial strum: 6 and 3. The next chord starts from the whole chord, not from two fingers, and holds 3 of its 4
-    strings instead of 4 (snow loses that note too)."""
+    next chord. The chord's fingering already plays the partial strum, so it stays, as a guitarist keeps a chord
+    down: no finger lifts and lands again at the boundary, and the tracked motion holds all 6 strings of the second
+    chord and all 3 of the first partial one."""
     chord = [7, 7, 8, 9, 9, 7]                                   # strings 1..6
     part = [0, 0, 0, 9, 9, 7]
     goal = np.array([[0] * 6, chord, chord, part, part, [0, 11, 11, 11, 9, 0]])
     onset = np.array([0, 20, 29, 38, 47, 56, 65])
-    notes = Notes(goal, goal > 0, onset)
-    plan12, held12 = fingering_and_held(12, notes)
-    plan13, held13 = fingering_and_held(13, notes)
-    assert plan12[2] != plan12[1] and held12 == [6, 3, 2, 3, 4]
-    assert plan13[0] == plan13[1] == plan13[2] == plan13[3] and held13 == [6, 6, 3, 3, 3]
+    plan, held = fingering_and_held(Notes(goal, goal > 0, onset))
+    assert plan[0] == plan[1] == plan[2] == plan[3] and held == [6, 6, 3, 3, 3]
 
 
-def test_version_14_glides_along_a_fast_chromatic_run():
+def test_a_fast_chromatic_run_glides():
     """Frets 1 to 9 on string 1 in 5-frame notes (flight_of_the_bumblebee1's run, notes 194-209, goes on to fret 17).
-    Version 13 plans as few moves as cover the line: frets 1-4 in position 1, then a 4-fret jump to position 5, which
-    the wrist (kp 10 on 0.2 kg) cannot make in the frame of slack a 5-frame note has; the tracked motion loses the
-    three notes around the jump. Version 14 makes a move between two such short notes cost per fret beyond one: the
-    little finger stays on the string and slides one fret a note while the hand follows, and every note holds.
-    Notes of 9 frames plan exactly as before."""
+    As few moves as cover the line would be frets 1-4 in position 1, then a 4-fret jump to position 5, which the
+    wrist (kp 10 on 0.2 kg) cannot make in the frame of slack a 5-frame note has. A move between two such short notes
+    costs per fret beyond one: the little finger stays on the string and slides one fret a note while the hand
+    follows, and every note holds on the tracked motion."""
     line = list(range(1, 10))
     goal = np.array([[0] * 6] + [[k, 0, 0, 0, 0, 0] for k in line])
     onset = np.r_[0, 20 + 5 * np.arange(len(line) + 1)]
-    notes = Notes(goal, goal > 0, onset)
-    plan13, held13 = fingering_and_held(13, notes)
-    plan14, held14 = fingering_and_held(14, notes)
-    assert [p for p, _ in plan13] == [1, 1, 1, 1, 5, 5, 5, 5, 6] and held13 == [1, 1, 1, 0, 0, 0, 1, 1, 1]
-    assert plan14 == [(1, {0: (0, 1)}), (1, {1: (0, 2)}), (1, {2: (0, 3)})] + [(k - 3, {3: (0, k)}) for k in line[3:]]
-    assert held14 == [1] * len(line)
-    slow = Notes(goal, goal > 0, np.r_[0, 20 + 9 * np.arange(len(line) + 1)])
-    np.testing.assert_array_equal(ScriptedLeft(14).desired(slow), ScriptedLeft(13).desired(slow))
+    plan, held = fingering_and_held(Notes(goal, goal > 0, onset))
+    assert plan == [(1, {0: (0, 1)}), (1, {1: (0, 2)}), (1, {2: (0, 3)})] + [(k - 3, {3: (0, k)}) for k in line[3:]]
+    assert held == [1] * len(line)
 
 
-def test_version_15_takes_a_shift_from_the_note_that_can_spare_it():
+SPRING = np.array([[0] * 6, [12, -1, -1, 0, 0, 0], [10, -1, -1, 0, 0, 0], [8, -1, -1, 0, 0, 0]])
+SPRING_ONSET = np.array([0, 17, 23, 29, 53])
+
+
+def test_a_shift_takes_its_frames_from_the_note_that_can_spare_them():
     """spring_overture, notes 2-4: frets 12 and 10 on string 1 for 6 frames each (strings 2-3 open), then fret 8 for
     24 frames, which moves the hand from position 9 to 8. The right hand strums strings 3, 2, 1 and reaches string 1
     at frame 3 (from 0) of a 6-frame note; the paper's rule (3) then wants fret 10 held for 4 frames from that pick,
-    into the next note. Version 14 centres the 6-frame shift on the change and fret 10 lasts 2 frames from the pick.
-    Version 15 takes the shift's frames from the two notes in proportion to what each can spare (2 of 6 frames and 8
-    of 24): fret 10 lasts the 4 frames, and every note still holds its 2/3."""
-    goal = np.array([[0] * 6, [12, -1, -1, 0, 0, 0], [10, -1, -1, 0, 0, 0], [8, -1, -1, 0, 0, 0]])
-    onset = np.array([0, 17, 23, 29, 53])
-    notes = Notes(goal, goal > 0, onset)
-
-    def from_pick(version):
-        hand = ScriptedLeft(version=version)
-        press = tracked_presses(hand, notes)
-        rows = press[onset[2] + 4:, 0]          # string 1 from the state after the pick's step (frame 3, from 0)
-        held = int(np.argmax(rows != 10)) if np.any(rows != 10) else len(rows)
-        return [p for p, _ in hand.fingering(notes)[1:]], held, [strings_held(press, goal, onset, i) for i in (1, 2, 3)]
-    assert from_pick(14) == ([9, 9, 8], 2, [1, 1, 1])
-    assert from_pick(15) == ([9, 9, 8], 4, [1, 1, 1])
+    into the next note. The 6-frame shift takes its frames from the two notes in proportion to what each can spare
+    (2 of 6 frames and 8 of 24): fret 10 lasts 4 frames or more from the pick, and every note holds its 2/3."""
+    notes = Notes(SPRING, SPRING > 0, SPRING_ONSET)
+    hand = ScriptedLeft()
+    press = tracked_presses(hand, notes)
+    rows = press[SPRING_ONSET[2] + 4:, 0]          # string 1 from the state after the pick's step (frame 3, from 0)
+    assert [p for p, _ in hand.fingering(notes)[1:]] == [9, 9, 8]
+    assert int(np.argmax(rows != 10)) >= 4
+    assert [strings_held(press, SPRING, SPRING_ONSET, i) for i in (1, 2, 3)] == [1, 1, 1]
 
 
-def test_version_16_drops_a_string_no_hand_position_spans():
+def test_a_string_no_hand_position_spans_is_dropped():
     """sonata_in_f_major_ms84_no14, notes 23-26: strings 1-2 at fret 6, the same with string 4 at fret 2, then strings
-    1-2 at fret 8 with string 4 still at fret 2: seven frets, which no hand position spans. Version 5's partial search
-    tries only fingerings of all three strings; there are none, so the rule's own stretches from position 2 to fret 8,
-    and the tracked motion holds none of the chord's strings (nor, as the fingers head there, of the note before).
-    Version 16 tries two of the three strings: both frets 8 from position 5 (F1 0.8), and the note before holds too."""
+    1-2 at fret 8 with string 4 still at fret 2: seven frets, which no hand position spans. Where no fingering of all
+    three strings exists, the partial search tries two of them: both frets 8 from position 5 (F1 0.8), instead of a
+    stretch from position 2 to fret 8 that would hold none; the note before holds all three of its strings."""
     goal = np.array([[0] * 6, [6, 6, 0, -1, 0, 0], [6, 6, 0, 2, 0, 0], [8, 8, 0, 2, 0, 0], [0, 0, 0, 0, 8, 0]])
     onset = np.array([0, 20, 38, 56, 74, 83])
-    notes = Notes(goal, goal > 0, onset)
-    plan15, held15 = fingering_and_held(15, notes)
-    plan16, held16 = fingering_and_held(16, notes)
-    assert plan15[2] == (2, {0: (3, 2), 2: (1, 8), 3: (0, 8)}) and held15 == [2, 0, 0, 1]
-    assert plan16[2] == (5, {2: (1, 8), 3: (0, 8)}) and held16 == [2, 3, 2, 1]
+    plan, held = fingering_and_held(Notes(goal, goal > 0, onset))
+    assert plan[2] == (5, {2: (1, 8), 3: (0, 8)}) and held == [2, 3, 1, 1]
 
 
-def test_version_17_keeps_the_lower_finger_down_through_a_trill():
-    """flight_of_the_bumblebee1's trills on string 3 (frets 7-6-7-6 in 5-frame notes, notes 115-118 and 179-182):
-    version 16 lifts the middle finger off fret 6 while the ring finger plays fret 7, and presses it again for the
-    next 6. Played through the whole song, the ring finger then held fret 7 for 3 of the 4 frames a 5-frame note needs
-    (notes 116 and 180 lost; 0.967 -> 0.977 with version 17, scripted table). Version 17 keeps the middle finger down
-    on fret 6 under fret 7 (the highest fret sounds), so going back down is a pull-off, and lifts the ring finger at
-    the boundary rather than ahead of it. A line that goes on up the string (6, 7, 8) is planned as before."""
+def test_a_trill_keeps_the_lower_finger_down():
+    """flight_of_the_bumblebee1's trills on string 3 (frets 7-6-7-6 in 5-frame notes, notes 115-118 and 179-182): the
+    middle finger stays down on fret 6 under the ring finger's fret 7 (the highest fret sounds), so going back down
+    is a pull-off, and the ring finger lifts at the boundary rather than ahead of it: its lift of 3 frames starts
+    0.3 of them (`pull_lead`) before the boundary, within the last frame of the note. A line that goes on up the
+    string (6, 7, 8) keeps no finger down."""
     trill = [6, 7, 6, 7, 6, 5]
     goal = np.array([[0] * 6] + [[0, 0, k, 0, 0, 0] for k in trill])
     onset = np.r_[0, 20 + 5 * np.arange(len(trill) + 1)]
     notes = Notes(goal, goal > 0, onset)
-    up = [(5, {2: (2, 7)})]
-    assert [ScriptedLeft(16).fingering(notes)[i] for i in (2, 4)] == up * 2
-    assert [ScriptedLeft(17).fingering(notes)[i] for i in (2, 4)] == [(5, {2: (2, 7), 1: (2, 6)})] * 2
-    middle = FINGER_DOFS[1]
+    hand = ScriptedLeft()
+    assert [hand.fingering(notes)[i] for i in (2, 4)] == [(5, {2: (2, 7), 1: (2, 6)})] * 2
+    q = hand.desired(notes)
+    middle, ring = FINGER_DOFS[1], FINGER_DOFS[2]
     rows = slice(onset[2] + 1, onset[5] + 1)             # from the first 7 to the end of the second 7
-    v16, v17 = ScriptedLeft(16).desired(notes), ScriptedLeft(17).desired(notes)
-    assert np.ptp(v17[rows, middle], axis=0).max() < 1e-9 < np.ptp(v16[rows, middle], axis=0).max()
-    ring = FINGER_DOFS[2]
-    # at the boundary into the 6, the ring finger has left its press on fret 7 (the pose 2 rows before) by less
-    lifted = lambda q: np.abs(q[onset[3], ring] - q[onset[3] - 2, ring]).max()
-    assert 0 < lifted(v17) < 0.6 * lifted(v16)
+    assert np.ptp(q[rows, middle], axis=0).max() < 1e-9
+    np.testing.assert_array_equal(q[onset[3] - 1, ring], q[onset[3] - 2, ring])      # still pressing ...
+    assert np.abs(q[onset[3], ring] - q[onset[3] - 1, ring]).max() > 0.01            # ... lifting by the boundary
     line = np.array([[0] * 6] + [[0, 0, k, 0, 0, 0] for k in (6, 7, 8)])
     climb = Notes(line, line > 0, np.r_[0, 20 + 5 * np.arange(4)])
-    np.testing.assert_array_equal(ScriptedLeft(17).desired(climb), ScriptedLeft(16).desired(climb))
+    assert [len(f) for _, f in hand.fingering(climb)[1:]] == [1, 1, 1]
 
 
-def test_version_18_lifts_and_lands_clear_of_the_next_string_in_a_shift():
-    """spring_overture, notes 2-4 (as for version 15): `10 0 0` then `8 0 0`, the hand moving from position 9 to 8.
-    Joined straight in joint space while the wrist moves, the middle finger leaving fret 10 of string 1 and the index
-    landing on its fret 8 press string 2, which both notes want open, for 3 frames after the change: a pick of string
-    2 there is "picked before the press", and the hold of the note before breaks. Version 18 passes both fingers 7 mm
-    above the string they leave or land on. String 1's frets are held as before. Jumps of more than `via_shift` frets
-    keep the straight path (vias there took the 48 held-out songs from 0.8114 to 0.8011, the songs of jumps most)."""
-    goal = np.array([[0] * 6, [12, -1, -1, 0, 0, 0], [10, -1, -1, 0, 0, 0], [8, -1, -1, 0, 0, 0]])
-    onset = np.array([0, 17, 23, 29, 53])
-    notes = Notes(goal, goal > 0, onset)
-    change = slice(onset[3] - 3, onset[3] + 8)
-    v17, v18 = (tracked_presses(ScriptedLeft(v), notes) for v in (17, 18))
-    assert np.count_nonzero(v17[change, 1]) == 3 and np.count_nonzero(v18[change, 1]) == 0
-    assert [strings_held(v18, goal, onset, i) for i in (1, 2, 3)] == [1, 1, 1]
-    first8 = lambda press: int(np.argmax(press[onset[3]:, 0] == 8))
-    assert first8(v18) == first8(v17)
-    # a jump (here 5 frets, fret 10 to 3) is left as it was: there the detour lost held-out songs of large jumps
-    jump = goal.copy()
+def test_a_shift_lifts_and_lands_clear_of_the_next_string():
+    """spring_overture, notes 2-4 (`SPRING`): `10 0 0` then `8 0 0`, the hand moving from position 9 to 8. Joined
+    straight in joint space while the wrist moves, the middle finger leaving fret 10 of string 1 and the index
+    landing on its fret 8 would press string 2, which both notes want open: a pick of string 2 there would be
+    "picked before the press". Both fingers pass 7 mm above the string they leave or land on (`shift_via`), and the
+    tracked motion never presses string 2 around the change. Jumps of more than `via_shift` frets keep the straight
+    path (vias there lost held-out songs of large jumps)."""
+    notes = Notes(SPRING, SPRING > 0, SPRING_ONSET)
+    hand = ScriptedLeft()
+    press = tracked_presses(hand, notes)
+    assert np.count_nonzero(press[SPRING_ONSET[3] - 3:SPRING_ONSET[3] + 8, 1]) == 0
+    assert [strings_held(press, SPRING, SPRING_ONSET, i) for i in (1, 2, 3)] == [1, 1, 1]
+    plan = hand.fingering(notes)
+    assert plan[2][1] == {1: (0, 10)} and plan[3][1] == {0: (0, 8)}
+    assert [hand.shift_via(f, plan[2], plan[3], SPRING[2], SPRING[3]) is None for f in range(4)] == [
+        False, False, True, True]
+    jump = SPRING.copy()                                  # a jump of 6 frets, fret 10 to 3: no detour
     jump[3, 0] = 3
-    far = Notes(jump, jump > 0, onset)
-    np.testing.assert_array_equal(ScriptedLeft(18).desired(far), ScriptedLeft(17).desired(far))
-
-
-def _one_thread_fingering_and_held(job):
-    """`fingering_and_held` of (version, goal, onset), run by `FF.in_processes` with one BLAS thread, as every plan is
-    made: the IK of a version before `CONVERGED` stops short of convergence, where rounding decides."""
-    version, goal, onset = job
-    return fingering_and_held(version, Notes(goal, goal > 0, onset))
+    plan = hand.fingering(Notes(jump, jump > 0, SPRING_ONSET))
+    assert abs(plan[3][0] - plan[2][0]) > hand.via_shift
+    assert all(hand.shift_via(f, plan[2], plan[3], jump[2], jump[3]) is None for f in range(4))
 
 
 SONATA_BASS = [1, 1, 2, 0, 0, 1]
@@ -549,85 +448,75 @@ def test_a_barre_stays_and_a_guide_finger_keeps_its_place():
     most one. (b) `SONATA_GUIDE`: `1 x x 0 1 0` (strings 1 and 3 open) after the barre, then `1 3 x x x x`: the
     bass stays under the middle finger, which pressed it in the note before, and `1 x x 0 1 0` holds both strings;
     moved to the index, which must cross from string 2, it held at most one."""
-    plan, held = fingering_and_held(LATEST, SONATA_BARRE)
+    plan, held = fingering_and_held(SONATA_BARRE)
     assert [p for p, _ in plan] == [BARRE_POSITIONS + 1] * 5
     assert plan[2][1] == {0: (BARRE, 1), 2: (PAIR + 1, 3)} and held[2] == 4
-    plan, held = fingering_and_held(LATEST, SONATA_GUIDE)
+    plan, held = fingering_and_held(SONATA_GUIDE)
     assert plan[2] == (1, {0: (1, 1), 1: (5, 1)}) and plan[3][1][1] == (5, 1)
     assert held[2] == 2
 
 
-def test_version_20_hammers_a_double_stop_on_a_frame_sooner():
+def test_a_double_stop_hammered_on_lands_a_frame_sooner():
     """johnny_b_goodie, notes 4-10: `x x x x 5 5` then `x x x x 6 6` in 5-frame notes (which must hold 4 frames),
     strings 1-2 under one finger each time (`PAIR`). The middle finger landing on fret 6 would change the note before,
-    so it lands after the boundary; in the song it pressed from frame 3 of 5, and the note held 3 (0.970 -> 1.000 with
-    version 20, scripted table). Version 20 lands such a hammered-on double stop one frame sooner (within what the
-    note before can spare): the same fingering, and here the second `6 6` holds both strings where it held one."""
-    from dexguitar.motion import feedforward as FF
+    so it lands after the boundary, but a double stop hammered on (both strings pressed lower in the note before)
+    lands a frame sooner, within what the note before can spare: every note holds both strings."""
     goal = np.array([[0] * 6, [0, 8, 0, 0, 0, 0], [5, 5, 0, 0, 0, 0], [6, 6, 0, 0, 0, 0], [6, 6, 0, 0, 0, 0],
                      [5, 5, 0, 0, 0, 0], [6, 6, 0, 0, 0, 0], [6, 6, 0, 0, 0, 0]])
     onset = np.cumsum([0, 20, 10, 5, 5, 10, 5, 5, 10])
-    (plan19, held19), (plan20, held20) = FF.in_processes(
-        _one_thread_fingering_and_held, [(19, goal, onset), (20, goal, onset)])[0]
-    assert plan19 == plan20 and plan20[4:6] == [(5, {0: (PAIR, 5)}), (5, {1: (PAIR, 6)})]
-    assert held19[5] == 1 and held20[5] == 2
-    assert held20 == [1, 2, 2, 2, 2, 2, 2]
+    notes = Notes(goal, goal > 0, onset)
+    plan, held = fingering_and_held(notes)
+    assert plan[4:6] == [(5, {0: (PAIR, 5)}), (5, {1: (PAIR, 6)})]
+    assert held == [1, 2, 2, 2, 2, 2, 2]
+    # note 6's landing: 3 frames (5-frame notes), not led (the note before spares 1 frame: tb = onset + 0.5), from
+    # tb + 1 - 0.6 * 3 - 1 = onset - 1.3 to onset + 1.7: pressing from row onset + 2 on (a frame later: onset + 3)
+    q = ScriptedLeft().desired(notes)
+    middle = FINGER_DOFS[1]
+    pressing = q[onset[7], middle]                              # `6 6` again in note 7: the same press
+    np.testing.assert_allclose(q[onset[6] + 2, middle], pressing, rtol=0, atol=1e-12)
+    assert np.abs(q[onset[6] + 1, middle] - pressing).max() > 1e-3
 
 
-def _one_thread_frames_right(job):
-    """Per note after the opening rest, the frames of it in which the tracked plan of `version` has every string as
-    the note asks, open strings included (`scoring.left_ok`); run by `FF.in_processes` with one BLAS thread."""
-    from dexguitar.envs import scoring
-    version, goal, onset = job
-    press = tracked_presses(ScriptedLeft(version=version), Notes(goal, goal != 0, onset))
-    return [int(np.sum(np.all(np.asarray(scoring.left_ok(press[onset[i] + 1:onset[i + 1] + 1], goal[i])), axis=1)))
-            for i in range(1, len(goal))]
-
-
-def test_version_21_hovers_clear_of_a_string_its_note_wants_open():
+def test_a_finger_hovers_clear_of_a_string_its_note_wants_open():
     """prelude1_in_c_major_chords, notes 93-105 in 9-frame notes over the bass on string 5 at fret 3 (from hand
     position 2 to 1): ... string 2 open, at fret 3, fret 1 on string 1, at fret 3, open, at fret 3. In position 1 the
-    middle finger presses string 2 at fret 3, a fret beyond its own; for the open note between two such presses it
-    hovers over that place, where it cannot lift its tip more than 6.7 mm above the strings, and in physics it stays
-    within the press distance: string 2 sounds at fret 3 through the whole note (the song's only wrong-fret note,
-    103). Version 21 hovers that finger over its own fret there, 10 mm up: the note has string 2 open for 2/3 of
-    itself, and every other note is as before."""
-    from dexguitar.motion import feedforward as FF
+    middle finger presses string 2 at fret 3, a fret beyond its own; for the open note between two such presses,
+    over that place it cannot lift its tip more than 6.7 mm above the strings, and in physics it would stay within
+    the press distance and sound string 2 at fret 3 (the song's note 103). It hovers over its own fret there, 10 mm
+    up, and on the tracked motion every note has its strings as it asks for 2/3 of itself (6 of 9 frames)."""
+    from dexguitar.envs import scoring
     goal = np.array([[0] * 6, [0, 0, 0, 3, 5, 0], [0, 0, 0, 0, 3, 0], [0, -1, 0, 0, 3, 0], [0, 3, 0, 0, 3, 0],
                      [1, 0, 0, 0, 3, 0], [0, 3, 0, 0, 3, 0], [0, -1, 0, 0, 3, 0], [0, 3, 0, 0, 3, 0],
                      [0, -1, 0, 0, 0, 0]])
     onset = np.r_[0, 20 + 9 * np.arange(len(goal))]
-    right20, right21 = FF.in_processes(_one_thread_frames_right, [(20, goal, onset), (21, goal, onset)])[0]
-    assert right20[6] == 0 and right21[6] >= 6           # a 9-frame note needs 6
-    others = [i for i in range(len(right20)) if i != 6]
-    assert [right21[i] >= 6 for i in others] == [right20[i] >= 6 for i in others]
     notes = Notes(goal, goal != 0, onset)
-    for version, high in ((20, False), (21, True)):
-        hand = ScriptedLeft(version)
-        plan = hand.plans(notes)[0]
-        assert plan[6:9] == [(1, {1: (1, 3), 2: (4, 3)}), (1, {2: (4, 3)}), (1, {1: (1, 3), 2: (4, 3)})]
-        assert (hand.tip_height(hand.configs(notes, plan)[7][0], 1) >= hand.open_clear) == high
+    hand = ScriptedLeft()
+    press = tracked_presses(hand, notes)
+    right = [int(np.sum(np.all(np.asarray(scoring.left_ok(press[onset[i] + 1:onset[i + 1] + 1], goal[i])), axis=1)))
+             for i in range(1, len(goal))]
+    assert min(right) >= 6, right
+    plan = hand.plans(notes)[0]
+    assert plan[6:9] == [(1, {1: (1, 3), 2: (4, 3)}), (1, {2: (4, 3)}), (1, {1: (1, 3), 2: (4, 3)})]
+    assert hand.tip_height(hand.configs(notes, plan)[7][0], 1) >= hand.open_clear
 
 
-def test_right_version_4_leaves_the_stroke_before_an_early_crossing_its_time():
+def test_an_early_crossing_leaves_the_stroke_before_its_time():
     """flight_of_the_bumblebee1's line down string 3 (frets 8 to 4) and on to string 2 at fret 5, 5-frame notes. The
-    left hand lets go of string 2's fret a step early, so version 3 (`fit`) crosses string 2 in step 0 of its note:
-    4 steps after the crossing before, which leaves the stroke over string 3 before it 3.4 frames, and in the song the
-    simulated pick then missed such notes (4 of its 9 right-hand misses in the duet). Version 4 moves a crossing into
-    step 0 only 4.5 steps or more after the one before; in the song, the right hand in the duet 0.958 -> 0.986, both
-    hands 0.902 -> 0.926 (`python -m dexguitar.perform.scripted --envs duet --tabs ...`)."""
+    left hand lets go of string 2's fret a step early, so crossing string 2 in step 0 of its note would hold more of
+    it (`fit`); but that is 4 steps after the crossing before, which would leave the stroke over string 3 before it
+    3.4 frames, and in the song the simulated pick then missed such notes. A crossing moves into step 0 only
+    `early_gap` (4.5) steps or more after the one before: every crossing stays in step 1 (at 1.5), and the stroke
+    over string 3 before string 2 keeps more than 4 frames."""
     frets = [(3, 8), (3, 7), (3, 6), (3, 5), (3, 4), (2, 5)] * 2
     goal = np.zeros((len(frets) + 1, 6), int)
     for i, (s, k) in enumerate(frets):
         goal[i + 1, s - 1] = k
     notes = Notes(goal, goal != 0, np.r_[0, 20 + 5 * np.arange(len(frets) + 1)])
-    (_, q), = FF.plan_all([(notes.left, notes.pick, notes.onset, LATEST)], log=lambda m: None)
+    (_, q), = FF.plan_all([(notes.left, notes.pick, notes.onset)], log=lambda m: None)
     timing = ScriptedLeft().timing(notes, q)
-    strokes = {v: ScriptedRight(v).sweeps(notes, timing)[0] for v in (3, 4)}
-    steps = {v: [s.cross - notes.onset[s.note] for s in strokes[v]] for v in strokes}
-    assert steps[3][5] == 0.5 and steps[3][4] == 1.5 and strokes[3][4].frames < 3.5      # 4 steps apart
-    assert steps[4] == [1.5] * len(frets) and strokes[4][4].frames > 4.0
-    assert steps[3][6:] == steps[4][6:]                  # the second time the line is no quicker: as version 3
+    strokes = ScriptedRight().sweeps(notes, timing)[0]
+    assert [s.cross - notes.onset[s.note] for s in strokes] == [1.5] * len(frets)
+    assert strokes[4].frames > 4.0
 
 
 def test_the_count_in_gives_the_hand_time_to_reach_a_far_first_note():

@@ -66,9 +66,8 @@ class EnvConfig:
     hold_reward: float = 0.0             # duet, not in the paper: added to the pick column per string whose
                                          # both-hands hold (rule (3) of both-hands F1) completes in the step
     mirror: bool = False                 # the left-handed player's scene
-    feedforward: int = 0                 # the left action is a residual on the planner's (`motion.feedforward`)
-                                         # of this version (`motion.planner.LATEST`; True = 1); 0: none
-    right_feedforward: int = 0           # the right action likewise, on the right planner's (`planner.RIGHT_LATEST`)
+    feedforward: bool = False            # the left action is a residual on the planner's (`motion.feedforward`)
+    right_feedforward: bool = False      # the right action likewise, on the right planner's
     margin_reward: float = 0.0           # not in the paper: added to each string's column times its press margin
                                          # (`rewards.margin_reward`), a smooth measure of how robustly it plays
 

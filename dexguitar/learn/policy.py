@@ -25,6 +25,7 @@ from dexguitar.envs.layout import ObsLayout
 from dexguitar.errors import UserError
 from dexguitar.learn import checkpoint as C
 from dexguitar.learn import networks as N
+from dexguitar.motion.planner import PLANNER_VERSION, RIGHT_PLANNER_VERSION
 from dexguitar.world.hands import N_DOF
 
 KINDS = ("policy", "synchronizer")
@@ -39,17 +40,17 @@ class PolicySpec:
     hand: str                 # "left", "right" or "duet"
     action_size: int
     layout: ObsLayout
-    feedforward: int = 0      # the left hand's action is a residual on the planner's of this version (0: none)
-    scale: float = 1.0        # the left hand's network output times this (`networks.Policy.scale`)
-    right_feedforward: int = 0    # the right hand's action is a residual on the right planner's of this version
+    feedforward: bool = False     # the left hand's action is a residual on the planner's (`motion.feedforward`)
+    scale: float = 1.0            # the left hand's network output times this (`networks.Policy.scale`)
+    right_feedforward: bool = False   # the right hand's action is a residual on the right planner's
 
     def hand_spec(self, i: int) -> "PolicySpec":
         """The single-hand policy of hand i of a synchronizer."""
         role = self.layout.roles[i]
         left = role == "left"
         return PolicySpec("policy", role, self.action_size // self.layout.hands, self.layout.one_hand(i),
-                          self.feedforward if left else 0, self.scale if left else 1.0,
-                          0 if left else self.right_feedforward)
+                          self.feedforward if left else False, self.scale if left else 1.0,
+                          False if left else self.right_feedforward)
 
     def env_config(self, config):
         """`config` (an `EnvConfig`) as this policy must be played in: on the planners' feedforwards or not."""
@@ -58,16 +59,18 @@ class PolicySpec:
     def to_meta(self) -> dict:
         meta = {"kind": self.kind, "hand": self.hand, "action_size": self.action_size,
                 "layout": self.layout.to_dict(), "obs_size": self.layout.obs_size, "goal_size": self.layout.goal_size}
-        if self.feedforward:
-            meta["feedforward"] = int(self.feedforward)
+        if self.feedforward:            # the planner's version number: older releases read it
+            meta["feedforward"] = PLANNER_VERSION
         if self.scale != 1.0:
             meta["scale"] = float(self.scale)
         if self.right_feedforward:
-            meta["right_feedforward"] = int(self.right_feedforward)
+            meta["right_feedforward"] = RIGHT_PLANNER_VERSION
         return meta
 
     @classmethod
     def from_meta(cls, meta: dict) -> "PolicySpec":
+        """The spec `policy.json` describes; a residual on a planner version this release does not have raises
+        `OldPlanner`."""
         if "layout" in meta:
             layout = ObsLayout.from_dict(meta["layout"])
         else:                  # exports written before the layout was recorded: one or two hands of 2 frames
@@ -75,8 +78,31 @@ class PolicySpec:
             goal = meta["goal_size"] // len(roles)
             layout = ObsLayout(roles, 2, (meta["obs_size"] - meta["goal_size"]) // (2 * len(roles)), goal, 6)
         return cls(meta.get("kind", "policy"), meta["hand"], meta["action_size"], layout,
-                   int(meta.get("feedforward", 0)),         # true (the first residuals) = version 1
-                   float(meta.get("scale", 1.0)), int(meta.get("right_feedforward", 0)))
+                   _on_planner(meta, "feedforward"), float(meta.get("scale", 1.0)),
+                   _on_planner(meta, "right_feedforward"))
+
+
+class OldPlanner(ValueError):
+    """A policy trained as a residual on a planner version that this release no longer has."""
+
+
+# `policy.json`'s keys of a residual on a planner, and the planner version number each holds
+PLANNER_KEYS = {"feedforward": PLANNER_VERSION, "right_feedforward": RIGHT_PLANNER_VERSION}
+
+
+def _on_planner(meta: dict, key: str) -> bool:
+    """Is `policy.json`'s policy a residual on the planner (`key`: "feedforward", the left one, or
+    "right_feedforward")? Its value is the planner's version number (`planner.PLANNER_VERSION`,
+    `RIGHT_PLANNER_VERSION`), or absent, 0 or false for none; any other (true: the first residuals' version 1) is a
+    planner this release does not have: `OldPlanner`."""
+    value = meta.get(key, 0)
+    if value is None or value is False or (type(value) is int and value == 0):
+        return False
+    if type(value) is int and value == PLANNER_KEYS[key]:
+        return True
+    raise OldPlanner(f"trained on a planner version this release no longer has ({json.dumps(key)}: "
+                     f"{json.dumps(value)}); only the left planner of version {PLANNER_VERSION} and the right "
+                     f"planner of version {RIGHT_PLANNER_VERSION} are kept, so use a newer export of this policy")
 
 
 # ----------------------------------------------------------------------------------------------------- acting
@@ -224,6 +250,8 @@ def read_meta(directory) -> dict:
     try:
         meta = json.loads(meta_path.read_text())
         PolicySpec.from_meta(meta)
+    except OldPlanner as err:
+        raise UserError(f"{meta_path}: {err}") from None
     except (ValueError, KeyError, TypeError) as err:
         raise UserError(f"{meta_path}: not a policy description ({err})") from None
     return meta

@@ -17,7 +17,6 @@ import fcntl
 import hashlib
 import json
 import os
-import runpy
 import sys
 import time
 from pathlib import Path
@@ -26,7 +25,6 @@ import jax
 import numpy as np
 import optax
 
-from dexguitar import envs as E
 from dexguitar.errors import RunError, TrainingDiverged, UserError
 from dexguitar.learn import checkpoint as C
 from dexguitar.learn import policy as PO
@@ -150,6 +148,8 @@ class RunDir:
         if not self.config.exists():
             raise RunError(f"{self.path}: no run to resume here (no config.json); leave out --resume to start one")
         old = json.loads(self.config.read_text())
+        if old.get("env"):
+            old["env"] = planner_flags(old["env"], self.config)
         diffs = []
         for key in sorted(set(old) | set(record)):
             a, b = old.get(key), record.get(key)
@@ -199,7 +199,7 @@ def export(trainer: Trainer, state, directory, saver: C.Saver | None = None) -> 
     PO.export(directory, trainer.actor_params(state.params, state.obs_norm), meta, saver)
 
 
-def check_init(init_from, hand: str, feedforward: int, scale: float = 1.0) -> dict:
+def check_init(init_from, hand: str, feedforward: bool, scale: float = 1.0) -> dict:
     """The meta of the exported policy that a run of `hand` starts from, if it can: a policy of that hand, a
     residual on the planner exactly when the run trains one (`EnvConfig.feedforward`), and of the run's action scale
     (`TrainConfig.action_scale`). Reads no weights."""
@@ -236,7 +236,7 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
     if jax.default_backend() == "cpu" and cfg.num_envs >= CPU_ENVS:
         log(f"warning: {cfg.num_envs} envs on a CPU: XLA:CPU's batched Cholesky factorizations (MJX) can wait on "
             "each other forever at this size (seen with 512 envs on 2 cores, experiments/cpu_lapack_hang.py); the "
-            "CPU configs use 4 (experiments/cpu_smoke.py)")
+            "CPU config uses 4 (--config cpu_smoke)")
     run = RunDir(out_dir, where.main)
     try:
         record = json.loads(json.dumps({  # as config.json holds it (tuples become lists)
@@ -388,37 +388,19 @@ def _rollback(trainer, run, where, attempt: int):
     return where.put(state, shardings)
 
 
-def recorded_config(record: dict, **overrides):
-    """(TrainConfig, EnvConfig) as a run recorded them (its config.json, read), with TrainConfig fields overridden by
-    name (None = keep): `--resume` without `--config` continues the run as it was made."""
-    train = {k: v for k, v in record["train"].items() if k in TRAIN_DEFAULTS}
-    env_fields = {f.name for f in dataclasses.fields(E.EnvConfig)}
-    env = {k: tuple(v) if isinstance(v, list) else v for k, v in record["env"].items() if k in env_fields}
-    return _overridden(TrainConfig(**train), overrides), E.EnvConfig(**env)
+def planner_flags(env: dict, where="the run's config.json") -> dict:
+    """A run's recorded EnvConfig fields (config.json's "env") with "feedforward" and "right_feedforward" as
+    booleans: a run may have recorded the planner's version number there (`policy.PLANNER_KEYS`). A run on a planner
+    version this release no longer has cannot go on (RunError)."""
+    out = dict(env)
+    for key, version in PO.PLANNER_KEYS.items():
+        value = out.get(key)
+        if type(value) is int and value not in (0, version):
+            raise RunError(f"{where}: made on a planner version this release no longer has (env.{key}: {value}); "
+                           f"only the left planner of version {PO.PLANNER_VERSION} and the right planner of version "
+                           f"{PO.RIGHT_PLANNER_VERSION} are kept, so start a new run")
+        if type(value) is int:
+            out[key] = bool(value)
+    return out
 
 
-def _overridden(cfg: TrainConfig, overrides: dict) -> TrainConfig:
-    """`cfg` with the fields named in `overrides` replaced (None = keep), checked (a UserError names a bad field)."""
-    cfg = dataclasses.replace(cfg, **{k: v for k, v in overrides.items() if k in TRAIN_DEFAULTS and v is not None})
-    try:
-        cfg.check()
-    except ValueError as err:
-        raise UserError(str(err)) from None
-    return cfg
-
-
-def load_config(path: str | None, **overrides):
-    """(TrainConfig, EnvConfig or None) from an experiments/*.py file defining CONFIG (and optionally ENV), with
-    TrainConfig fields overridden by name (None = keep)."""
-    cfg, env = TrainConfig(), None
-    if path:
-        if not Path(path).is_file():
-            raise UserError(f"--config {path}: no such file")
-        try:
-            ns = runpy.run_path(path)
-        except Exception as err:         # noqa: BLE001 - any error in the user's config file
-            raise UserError(f"--config {path}: {type(err).__name__}: {err}") from None
-        if not isinstance(ns.get("CONFIG"), TrainConfig):
-            raise UserError(f"--config {path}: defines no CONFIG = TrainConfig(...)")
-        cfg, env = ns["CONFIG"], ns.get("ENV")
-    return _overridden(cfg, overrides), env

@@ -47,8 +47,9 @@ class SyncTrainer(Trainer):
         self.sources = {"left": left[1], "right": right[1]}
 
     def make_spec(self) -> PolicySpec:
-        return PolicySpec("synchronizer", "duet", self.env.action_size, self.layout, self.env.config.feedforward,
-                          self.left_spec.scale, self.env.config.right_feedforward)
+        return PolicySpec("synchronizer", "duet", self.env.action_size, self.layout,
+                          bool(self.env.config.feedforward), self.left_spec.scale,
+                          bool(self.env.config.right_feedforward))
 
     def init_inputs(self) -> dict:
         return dict(super().init_inputs(), frozen=self.frozen)   # arguments of `init`: one program for any pair

@@ -34,7 +34,7 @@ from dexguitar.music import timeline as TL
 
 @dataclasses.dataclass(frozen=True)
 class TrainConfig:
-    """Defaults reproduce Table S1 of the paper (one V100: 512 envs); experiments/ holds the GPU-sized configs."""
+    """Defaults reproduce Table S1 of the paper (one V100: 512 envs); dexguitar/configs/ holds the GPU-sized configs."""
 
     hand: str = "left"
     num_envs: int = 512               # PPO workers
@@ -181,7 +181,8 @@ class Trainer:
 
     def make_spec(self) -> PolicySpec:
         return PolicySpec("policy", self.config.hand, self.env.action_size, self.layout,
-                          self.env.config.feedforward, self.config.action_scale, self.env.config.right_feedforward)
+                          bool(self.env.config.feedforward), self.config.action_scale,
+                          bool(self.env.config.right_feedforward))
 
     # ------------------------------------------------------------------------------------------ init
     def init(self, key=None) -> TrainState:

@@ -91,7 +91,7 @@ def record(hand: str, song: Song | None = None) -> Motion:
     the simulated joint values at 60 fps."""
     song = song or SONGS[hand]()
     notes = _notes(song)
-    player = PL.ScriptedLeft() if hand == "left" else PL.ScriptedRight(1)     # the shipped right clip's version
+    player = PL.ScriptedLeft() if hand == "left" else PL.ScriptedRight()
     q_des = player.desired(notes)
     tracker = PL.Tracker(hand)
     _, q = tracker.track(q_des)

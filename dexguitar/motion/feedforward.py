@@ -2,7 +2,7 @@
 
 Why: the IK planner (`motion.planner`, no learning) plays the authors' songs at a mean left F1 of 0.87
 (results/scripted_official.md), while PPO from the home pose needs minutes per song and 2e8 samples for a general hand
-that still plays them at 0.19. With `EnvConfig(feedforward=LATEST)` the env adds the planner's action of the current
+that still plays them at 0.19. With `EnvConfig(feedforward=True)` the env adds the planner's action of the current
 song frame to the left hand's action, so a policy whose output starts at zero starts as the planner, and PPO only
 learns the corrections (residual RL). Training windows start in the planned state of their first frame (reference
 state initialization) and end with their last note, so the feedforward always belongs to the notes being played.
@@ -10,9 +10,9 @@ state initialization) and end with their last note, so the feedforward always be
 A `Plan` lives in `Timeline.plan` (song-frame indexed: frame 0 is the grace rest before the first note, as in a
 sequential window), so it travels with the songs into every jitted program as an argument. Planning takes seconds per
 song on one CPU core; `attach` plans in parallel processes and keeps each plan in a disk cache keyed by the song's
-notes and timing and the planner's version (`planner.LATEST`; a residual policy keeps the version it was trained on).
+notes and timing and the planner's constants (`planner.constants`).
 
-The right hand works the same way (`EnvConfig(right_feedforward=planner.RIGHT_LATEST)`, `Timeline.plan_right`): its
+The right hand works the same way (`EnvConfig(right_feedforward=True)`, `Timeline.plan_right`): its
 planner plays the 15 official songs at right F1 0.986-1.000 where `right_mixed`, trained on picking patterns, plays
 0.70-0.95. Alone its plan depends on the picked strings and onsets; in the duet it also waits, note by note, for the
 left hand's plan to hold the note (`left_plans`).
@@ -33,7 +33,7 @@ import jax
 import numpy as np
 from flax import struct
 
-from dexguitar.motion.planner import CONVERGED, LATEST, Notes, ScriptedLeft, ScriptedRight, Tracker
+from dexguitar.motion.planner import Notes, ScriptedLeft, ScriptedRight, Tracker, constants
 from dexguitar.world import hands as H
 from dexguitar.world import scene
 
@@ -54,14 +54,15 @@ def cache_dir() -> Path:
     return Path(os.environ.get("DEXGUITAR_PLANS", Path.home() / ".cache" / "dexguitar" / "plans"))
 
 
-def _job_key(left, onset, version: int, hand: str = "left", pick=None, after: int = 0) -> str:
+def _job_key(left, onset, hand: str = "left", pick=None, after: bool = False) -> str:
     """A plan's cache key: the left hand's plan depends on the left goals and onsets, the right hand's on the picked
-    strings and onsets, and where it waits for the left hand's plan (`after`: its version), on that plan too. A left
-    plan from version `CONVERGED` on, and a right one that waits for it, is named so: its IK runs to convergence."""
-    tag = f"v{version}" if hand == "left" else f"right-v{version}-after-{after}"
-    if (version if hand == "left" else after) >= CONVERGED:
-        tag += "-converged"
+    strings and onsets, and where it waits for the left hand's plan (`after`), on that plan too; each on its planner's
+    constants (`planner.constants`), so that a plan made with other constants is made again."""
+    tag = "left" if hand == "left" else "right-after-left" if after else "right"
     h = hashlib.sha256(tag.encode())
+    h.update(constants(hand).encode())
+    if hand == "right" and after:
+        h.update(constants("left").encode())
     if hand == "right":
         h.update(np.ascontiguousarray(pick, np.int32).tobytes())
     if hand == "left" or after:
@@ -74,30 +75,30 @@ _PLANNERS: dict = {}
 
 
 def plan_notes(job) -> tuple[np.ndarray, np.ndarray]:
-    """(action (T, 27), qpos (T + 1, 27)) of a hand's planner of a version for one `Notes` (left, pick, onset,
-    version[, hand: "left" (default) or "right"]), from the home pose. Runs in a worker process, which keeps its
-    planner and IK caches between songs."""
-    left, pick, onset, version, *rest = job
+    """(action (T, 27), qpos (T + 1, 27)) of a hand's planner for one `Notes` (left, pick, onset[, hand: "left"
+    (default) or "right"[, the tracked left plan's qpos that the right hand waits for]]), from the home pose. Runs
+    in a worker process, which keeps its planner and IK caches between songs."""
+    left, pick, onset, *rest = job
     role = rest[0] if rest else "left"
     after = rest[1] if len(rest) > 1 else None       # the right hand waits for this tracked left plan (qpos)
-    hand, tracker = _planner(role, version)
+    hand, tracker = _planner(role)
     notes = Notes(left, pick, onset)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         if role == "left":
             desired = hand.desired(notes)
         else:
-            earliest = None if after is None else _planner("left", LATEST)[0].timing(notes, after)
+            earliest = None if after is None else _planner("left")[0].timing(notes, after)
             desired = hand.desired(notes, earliest)
         ctrl, q = tracker.track(desired)
     return np.clip(tracker.to_action(ctrl), -1.0, 1.0).astype(np.float32), q.astype(np.float32)
 
 
-def _planner(role: str, version: int):
-    """(planner, tracker) of a hand and version, made once per process."""
-    if (role, version) not in _PLANNERS:
-        _PLANNERS[role, version] = (ScriptedLeft(version) if role == "left" else ScriptedRight(version), Tracker(role))
-    return _PLANNERS[role, version]
+def _planner(role: str):
+    """(planner, tracker) of a hand, made once per process."""
+    if role not in _PLANNERS:
+        _PLANNERS[role] = (ScriptedLeft() if role == "left" else ScriptedRight(), Tracker(role))
+    return _PLANNERS[role]
 
 
 # Planning pools kept for the next call (`in_processes(keep=True)`), by worker count: spawning a worker and importing
@@ -171,14 +172,10 @@ def _keep(workers: int, pool) -> None:
 
 def in_processes(fn, jobs, workers: int = 0, keep: bool = False) -> tuple[list, int]:
     """([fn(job) for job in jobs], processes used): on `workers` processes (0: one per CPU) with one BLAS thread
-    each, never in this process, even for one job. A left plan of a version before `planner.CONVERGED` depends on the
-    BLAS thread count (its IK stops short of convergence, where rounding decides): the 15 official songs planned with
-    2 threads and with 1 differed in every song, 11 of them by more than 0.04 of a half range in some action (`snow`
-    0.76). One thread everywhere makes such a plan the same for any core count (16 processes of 16 threads each also
-    ran at a load of 150 on a GPU host), though not on every CPU: BLAS kernels differ between CPUs too (`planner._fit`).
-    `fn` must be a module-level function.
+    each, never in this process, even for one job: one process per core does the work, and 16 processes of 16 BLAS
+    threads each ran at a load of 150 on a GPU host. `fn` must be a module-level function.
     keep: the processes stay for the next call with `keep` (`_KEPT`); only for work whose result does not depend on
-    what a worker did before (`_reusable`)."""
+    what a worker did before (a plan does not: `planner.ScriptedLeft.position`)."""
     workers = max(1, min(workers or os.cpu_count() or 1, len(jobs)))
     saved = _blas_one_thread()           # workers are spawned as jobs arrive, so for the whole call
     try:
@@ -202,19 +199,12 @@ def _progress(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
-def _reusable(job) -> bool:
-    """Can a warm worker plan this `plan_notes` job? Not the left planner before version 5, whose hand positions'
-    IK starts from the last one it solved in that process."""
-    left_hand = len(job) < 5 or job[4] == "left"
-    return not left_hand or job[3] >= 5
-
-
 def plan_all(jobs, workers: int = 0, log=None) -> list[tuple[np.ndarray, np.ndarray]]:
     """`plan_notes` of every job, in parallel processes."""
     log = log or _progress
     t0 = time.time()
-    out, used = in_processes(plan_notes, jobs, workers, keep=all(map(_reusable, jobs)))
-    hands = " and ".join(sorted({job[4] if len(job) > 4 else "left" for job in jobs}))
+    out, used = in_processes(plan_notes, jobs, workers, keep=True)
+    hands = " and ".join(sorted({job[3] if len(job) > 3 else "left" for job in jobs}))
     songs = f"{len(jobs)} song{'s' * (len(jobs) != 1)}"
     log(f"planned the {hands} hand for {songs} ({sum(len(a) for a, _ in out):,} frames) in {time.time() - t0:.0f} s "
         f"on {used} process{'es' * (used != 1)}")
@@ -231,16 +221,15 @@ def song_notes(songs, i: int, rest_frames: int):
     return Notes(left, pick, np.concatenate([[0], onset]))
 
 
-def plan_songs(songs, rest_frames: int = 5, workers: int = 0, log=None, version: int = LATEST, hand: str = "left",
-               after: tuple | None = None):
-    """(keys, {key: (action, qpos)}): the plan of each song of a batch by `hand`'s planner of `version` (key None: an
-    empty song), from the disk cache where it was made before, else made now (all in one pool) and cached.
-    after: (left planner version, per song its tracked plan's qpos): the right hand crosses each note's strings only
-    once that left hand holds the note (`left_plans`)."""
+def plan_songs(songs, rest_frames: int = 5, workers: int = 0, log=None, hand: str = "left", after: list | None = None):
+    """(keys, {key: (action, qpos)}): the plan of each song of a batch by `hand`'s planner (key None: an empty song),
+    from the disk cache where it was made before, else made now (all in one pool) and cached.
+    after: per song its tracked left plan's qpos: the right hand crosses each note's strings only once that left hand
+    holds the note (`left_plans`)."""
     S = int(np.shape(songs.n_notes)[0])
     notes = [song_notes(songs, i, rest_frames) if int(songs.n_notes[i]) > 0 else None for i in range(S)]
-    after_version, left_q = after if after is not None else (0, [None] * S)
-    keys = [_job_key(n.left, n.onset, version, hand, n.pick, after_version) if n is not None else None for n in notes]
+    left_q = after if after is not None else [None] * S
+    keys = [_job_key(n.left, n.onset, hand, n.pick, after is not None) if n is not None else None for n in notes]
     cache = cache_dir()
     found = {}
     for k in set(filter(None, keys)):
@@ -251,7 +240,7 @@ def plan_songs(songs, rest_frames: int = 5, workers: int = 0, log=None, version:
     todo = sorted({k for k in keys if k is not None and k not in found})
     if todo:
         jobs = {k: keys.index(k) for k in todo}
-        made = plan_all([(notes[i].left, notes[i].pick, notes[i].onset, version, hand, left_q[i])
+        made = plan_all([(notes[i].left, notes[i].pick, notes[i].onset, hand, left_q[i])
                          for i in jobs.values()], workers, log)
         cache.mkdir(parents=True, exist_ok=True)
         for k, (a, q) in zip(todo, made):
@@ -262,12 +251,12 @@ def plan_songs(songs, rest_frames: int = 5, workers: int = 0, log=None, version:
     return keys, found
 
 
-def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, log=None, version: int = LATEST,
-           hand: str = "left", after: tuple | None = None):
-    """The song batch (`timeline.batch`/`stack`) with a `Plan` per song by `hand`'s planner of `version`
-    (`plan_songs`), as `plan` (left) or `plan_right`; empty songs get a plan of the home pose."""
+def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, log=None, hand: str = "left",
+           after: list | None = None):
+    """The song batch (`timeline.batch`/`stack`) with a `Plan` per song by `hand`'s planner (`plan_songs`), as `plan`
+    (left) or `plan_right`; empty songs get a plan of the home pose."""
     from dexguitar.music.timeline import capacity
-    keys, found = plan_songs(songs, rest_frames, workers, log, version, hand, after)
+    keys, found = plan_songs(songs, rest_frames, workers, log, hand, after)
     F = capacity(max((len(found[k][0]) for k in found), default=1), MIN_FRAMES)
     flip = H.mirror_qpos(np.ones(H.N_DOF), hand) if mirror else np.ones(H.N_DOF, np.float32)
     act, qpos, qvel, frames = [], [], [], []
@@ -298,21 +287,20 @@ def prepare(songs, config):
     from dexguitar.envs import as_batch
     songs = as_batch(songs)
     if config is not None and config.feedforward and songs.plan is None:
-        songs = attach(songs, config.rest_frames, config.mirror, version=int(config.feedforward))
+        songs = attach(songs, config.rest_frames, config.mirror)
     if config is not None and config.right_feedforward and songs.plan_right is None:
-        songs = attach(songs, config.rest_frames, config.mirror, version=int(config.right_feedforward), hand="right",
-                       after=left_plans(songs, config))
+        songs = attach(songs, config.rest_frames, config.mirror, hand="right", after=left_plans(songs, config))
     return songs
 
 
-def left_plans(songs, config) -> tuple | None:
-    """Where both hands play on their planners (the duet): (left planner version, per song the tracked left plan's
-    qpos), which the right hand's plan waits for, note by note, as the paper's strict gate asks (a string picked
-    before the left hand holds the note is wrong); else None. The left plans come from the disk cache."""
+def left_plans(songs, config) -> list | None:
+    """Where both hands play on their planners (the duet): per song the tracked left plan's qpos, which the right
+    hand's plan waits for, note by note, as the paper's strict gate asks (a string picked before the left hand holds
+    the note is wrong); else None. The left plans come from the disk cache."""
     if not (config.feedforward and config.right_feedforward):
         return None
-    keys, found = plan_songs(songs, config.rest_frames, version=int(config.feedforward))
-    return int(config.feedforward), [found[k][1] if k is not None else None for k in keys]
+    keys, found = plan_songs(songs, config.rest_frames)
+    return [found[k][1] if k is not None else None for k in keys]
 
 
 def _extend(x: np.ndarray, frames: int) -> np.ndarray:

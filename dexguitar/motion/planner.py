@@ -9,16 +9,16 @@ each other (`perform.scripted` prints that table). The same motions, recorded, a
 How it plays, per hand, before the rollout (`perform.scripted.ScriptedPlayer.plans`):
 1. Keyframes in the guitar frame. Left hand: one-finger-per-fret hand positions covering 4 frets; each note's
    target strings get a fingertip on p_{i,k} resting on the fretboard, the other fingers hover 10 mm above the
-   strings (version 2 on: where that fingering does not hold a note in a short simulated trial, the cheapest
-   other one that does; version 7 on: one finger across two neighbouring strings at one fret; version 12 on: the
-   index barred across all six strings, in a hand pose of its own). Right hand (version 2): the pick stays 3 mm below
-   string height and sweeps from the gap before each note's first target string to the gap after its last, the
-   directions chosen over the whole song (alternate picking on one string, a sweep on to the next string), lifted
-   4 mm above the strings only over a string it passes without picking it.
+   strings; where that fingering does not hold a note in a short simulated trial, the cheapest other one that does;
+   one finger across two neighbouring strings at one fret; the index barred across all six strings, in a hand pose
+   of its own. Right hand: the pick stays 3 mm below string height and sweeps from the gap before each note's first
+   target string to the gap after its last, the directions chosen over the whole song (alternate picking on one
+   string, a sweep on to the next string), lifted 4 mm above the strings only over a string it passes without
+   picking it.
 2. Joint targets by least squares on MuJoCo C kinematics (`motion.kinematics.HandKinematics`; cached per keyframe,
-   warm-started; from version 21 on solved to convergence, so that a plan does not depend on the CPU's rounding:
-   `_fit`), joined by minimum-jerk interpolation with per-finger timing that anticipates the onset wherever an early
-   press cannot spoil the previous note.
+   warm-started, solved to convergence, so that a plan does not depend on the CPU's rounding: `_fit`), joined by
+   minimum-jerk interpolation with per-finger timing that anticipates the onset wherever an early press cannot spoil
+   the previous note.
 3. `Tracker`: the hands are slow PD systems (kp = 10; the 0.2 kg wrist rings for ~0.5 s), so the desired joint
    trajectory is turned into PD targets by a one-step inverse model, computed by finite differences with
    `mujoco.rollout` on the same model the env uses. The result is an open-loop action sequence for the env.
@@ -34,8 +34,11 @@ from __future__ import annotations
 import copy
 import dataclasses
 import functools
+import hashlib
+import inspect
 import itertools
-import warnings
+import sys
+from pathlib import Path
 
 import jax
 import jax.numpy as jnp
@@ -238,18 +241,9 @@ def _body_jac(k: HandKinematics, bid: int) -> np.ndarray:
 
 # ------------------------------------------------------------------------------------------------- right hand
 
-# Versions of the right hand's plans (`EnvConfig.right_feedforward`): 1 a stroke of 8 frames (+2 per extra string)
-# across each note's strings, gap to gap, with a travel at hover height of at least 3 frames between strokes that do
-# not start where the last one ended (notes of 8 frames or less that change strings come late or not at all); 2 the
-# pick stays below the strings and sweeps from crossing to crossing, each stroke's direction chosen over the whole
-# song (`ScriptedRight.directions`: alternate on one string, sweep on to the next one, few strings passed over), the
-# stroke shortened to the time between its neighbours, lifted only over a string it passes, and a crossing after a long
-# travel later in its note (`ScriptedRight.sweeps`); a strum over more strings is quicker, and in the duet each note's
-# first string is crossed as soon as the simulated left hand holds the note (`ready_lag`); 3 and in the duet a stroke
-# whose later strings would be picked too late for the planned left hand's press to last 2/3 of the note from the pick
-# (`LeftTiming.lasts`) is quicker, and crosses its first string in the note's first step where the left hand is ready
-# a step before (`ScriptedRight.fit`); 4 and only where the stroke before crossed `early_gap` steps before or more.
-RIGHT_LATEST = 4
+# The right planner's version number, written into exported residual policies (`policy.json`'s "right_feedforward")
+# so that older releases, which kept several planners, play them on this one; the only one `learn.policy` reads.
+RIGHT_PLANNER_VERSION = 4
 
 
 @dataclasses.dataclass
@@ -269,7 +263,7 @@ class LeftTiming:
 
 @dataclasses.dataclass
 class Sweep:
-    """One note's stroke in version 2: the pick moves from `start` to `end` (string coordinates: string i, 0-based,
+    """One note's stroke: the pick moves from `start` to `end` (string coordinates: string i, 0-based,
     at i; the gaps at i +- 0.5) in `frames` control steps, crossing its first string at step `cross` (a fraction
     `tau` of the way)."""
 
@@ -292,20 +286,14 @@ class Sweep:
 
 
 class ScriptedRight:
-    """The picking hand: the pick point follows strokes across the target strings, found by damped least squares
-    on the wrist (slides penalised: they are slow) with the fingers kept in the home grip. `version` (`RIGHT_LATEST`):
-    1 `strokes`, 2 `sweeps`, 3 and 4 `fit` in the duet. Version 4's `early_gap`: in `flight_of_the_bumblebee1`'s
-    5-frame lines a crossing moved into step 0 after a 5-frame note left that note a stroke too short (2.7 frames, 4
-    steps between crossings) for the simulated pick to cross its string; 4 such notes were missed."""
+    """The picking hand: the pick point follows strokes across the target strings (`sweeps`), found by damped least
+    squares on the wrist (slides penalised: they are slow) with the fingers kept in the home grip. In the duet a
+    stroke waits for the simulated left hand and is fitted to its presses (`fit`). `early_gap`: in
+    `flight_of_the_bumblebee1`'s 5-frame lines a crossing moved into step 0 after a 5-frame note would leave that note
+    a stroke too short (2.7 frames, 4 steps between crossings) for the simulated pick to cross its string: 4 such
+    notes missed."""
 
     depth = 0.003          # stroke bottom below string height (training needs >= 1 mm, evaluation > 0)
-    # version 1
-    hover = 0.006          # between notes, above string height
-    travel = 0.010         # when passing over other strings
-    low_apex = 0.0025      # between strokes less than 2 frames apart (no time to rise to `hover`)
-    stroke_frames = 8      # one string; +2 per extra string
-    cross_frame = 2        # the (first) string is crossed during this step of the note
-    # version 2
     lift = 0.004           # above string height while passing over a string that is not picked
     sweep_cross = 1        # a note's (first) string is crossed during this step of the note at the earliest ...
     ready_lag = 0          # ... and in the duet this many steps after the first step that ends with the note held
@@ -317,17 +305,13 @@ class ScriptedRight:
     spare = 1.0            # what a travel leaves free around it before its crossing is moved later
     max_delay = 2.0        # the most a crossing moves later in its note
     lift_cost = 1.0        # `directions`: a string passed over costs as much as moving one spacing more
-    # version 3 (the duet: `fit`)
+    # the duet (`fit`)
     strum_rate = 0.9       # a stroke quickened for the holds takes at least this many steps per string
     pick_lag = 0.4         # the simulated pick crosses a string up to this many steps after the plan does
     early_cross = 0.5      # where that holds more strings, a note's first string is crossed this late in its step 0
-    # version 4
     early_gap = 4.5        # ... only where the stroke before crossed its first string at least this many steps before
 
-    def __init__(self, version: int = RIGHT_LATEST):
-        if not 1 <= version <= RIGHT_LATEST:
-            raise ValueError(f"no right planner version {version} (1..{RIGHT_LATEST})")
-        self.version = version
+    def __init__(self):
         self.guitar = GUITAR
         self.kin = HandKinematics("right")
         self.kin.set(self.kin.home)
@@ -341,91 +325,11 @@ class ScriptedRight:
                                     [self.xs[-1] - sign * gap / 2]])
         self.active = np.arange(6)                       # wrist slides and hinges move, fingers hold the pick
         self.weights = np.array([0.03, 0.03, 0.03, 0.001, 0.001, 0.001])   # per m, per rad
-        # string coordinates (version 2): sigma -0.5, 0, 0.5, ..., 5.5 at the gaps and strings
+        # string coordinates: sigma -0.5, 0, 0.5, ..., 5.5 at the gaps and strings
         self._sig = np.arange(-0.5, N_STRINGS, 0.5)
         self._x = np.array([self.gaps[int(s + 0.5)] if s % 1 else self.xs[int(s)] for s in self._sig])
 
-    # --- the pick path
-    def strokes(self, notes: Notes, earliest=None):
-        """Segments (t0, t1, x0, x1, kind) of the pick's motion across the strings; kind: "travel" (at hover
-        height, lifted higher over strings in between) or "stroke" (down to `depth` below the strings).
-        earliest: optional (n,) first control step at which each note's strings may be crossed (the duet: once the
-        left hand holds the note)."""
-        s = self.guitar.sign
-        pos, t_free = self.pick0[0], 0.0
-        segs = []
-        for i in range(notes.n):
-            tg = np.flatnonzero(notes.pick[i])
-            if len(tg) == 0:
-                continue
-            a, b = tg.min(), tg.max()                                  # a is nearer string 1
-            down = (self.gaps[b + 1], self.gaps[a])                    # down-stroke: toward string 1
-            up = down[::-1]
-            if (pos - self.xs[b]) * s < 0:                             # on the string-6 side of the targets
-                start, end = down
-            elif (pos - self.xs[a]) * s > 0:                           # on the string-1 side
-                start, end = up
-            else:
-                start, end = down if abs(pos - down[0]) <= abs(pos - up[0]) else up
-            n_str = b - a + 1
-            dur = notes.onset[i + 1] - notes.onset[i]
-            D = self.stroke_frames + 2 * (n_str - 1)
-            tau_c = _min_jerk_inverse(0.5 / n_str)                       # first crossing, as a fraction of D
-            step = notes.onset[i] + self.cross_frame
-            if earliest is not None:
-                step = max(step, int(earliest[i]) + 1)
-            cross = step + 0.5                                            # cross in the middle of that step
-            t0 = cross - D * tau_c
-            if abs(start - pos) > 1e-6:
-                t_min = t_free + float(np.clip(2 + abs(start - pos) / 0.006, 3, 10))
-                segs.append((t_free, max(t0, t_min), pos, start, "travel"))
-            else:
-                t_min = t_free
-            if t_min > t0:                                # late: a quicker stroke (>= 6 frames) to catch up
-                D = float(np.clip((cross - t_min) / tau_c, 6, D))
-                t0 = t_min
-            if t0 + D * tau_c > notes.onset[i] + dur - 0.5:
-                warnings.warn(f"note {i}: the pick cannot reach its stroke within the note")
-            segs.append([t0, t0 + D, start, end, ["stroke", tau_c, self.hover, self.hover]])
-            pos, t_free = end, t0 + D
-        for prev, nxt in zip(segs[:-1], segs[1:]):      # back-to-back strokes: a low apex between them
-            if prev[4][0] == nxt[4][0] == "stroke" and nxt[0] - prev[1] < 2.0:
-                prev[4][3] = nxt[4][2] = self.low_apex
-        return segs, pos
-
-    def pick_path(self, notes: Notes, earliest=None) -> np.ndarray:
-        """(T + 1, 3) pick point at every control step boundary (guitar frame)."""
-        if self.version >= 2:
-            return self._sweep_path(notes, earliest)
-        segs, last = self.strokes(notes, earliest.ready if isinstance(earliest, LeftTiming) else earliest)
-        T = notes.frames
-        zs = self.guitar.string_z
-        out = np.zeros((T + 1, 3))
-        out[:, 1] = self.y
-        out[:, 0] = last
-        out[:, 2] = zs + self.hover
-        t = np.arange(T + 1, dtype=float)
-        first = segs[0][0] if segs else T + 1
-        out[t < first, 0] = self.pick0[0]
-        for t0, t1, x0, x1, kind in segs:
-            m = (t >= t0) & (t <= T)
-            u = np.clip((t[m] - t0) / (t1 - t0), 0, 1)
-            out[m, 0] = x0 + min_jerk(u) * (x1 - x0)
-            if kind == "travel":
-                crossing = np.any((self.xs - min(x0, x1) > 1e-6) & (max(x0, x1) - self.xs > 1e-6))
-                out[m, 2] = zs + self.hover + (self.travel - self.hover) * np.sin(np.pi * u) * crossing
-            else:
-                # plateau below the strings around the crossings; ramps in the gaps before / after
-                _, tau_c, h0, h1 = kind
-                ramp = 0.6 * tau_c
-                bump = np.minimum(np.clip(u / ramp, 0, 1), np.clip((1 - u) / ramp, 0, 1))
-                h = np.where(u < 0.5, h0, h1)
-                out[m, 2] = zs + h - (h + self.depth) * min_jerk(bump)
-        before = t < first
-        out[before, 2] = self.pick0[2] + (zs + self.hover - self.pick0[2]) * min_jerk(t[before] / max(first, 1))
-        return out
-
-    # --- version 2: sweeps
+    # --- the pick path: sweeps
     def x_of(self, sigma):
         """Guitar-frame x of string coordinates (linear beyond the outer gaps)."""
         s = np.asarray(sigma, float)
@@ -482,8 +386,8 @@ class ScriptedRight:
         return out
 
     def sweeps(self, notes: Notes, earliest=None) -> tuple[list[Sweep], float]:
-        """The strokes of versions 2 to 4 and the string coordinate of the home pick. earliest: None (alone), each
-        note's first step at which its strings may be crossed, or a `LeftTiming` (the duet)."""
+        """The strokes and the string coordinate of the home pick. earliest: None (alone), each note's first step at
+        which its strings may be crossed, or a `LeftTiming` (the duet)."""
         timing = earliest if isinstance(earliest, LeftTiming) else None
         earliest = timing.ready if timing is not None else earliest
         sigma0 = self.sigma_of(self.pick0[0])
@@ -509,7 +413,7 @@ class ScriptedRight:
             if late > 0 and travel > 0:
                 room = s.note_end - 1.5 - s.cross - (s.strings - 1)
                 s.cross += float(np.clip(late, 0.0, max(0.0, min(room, self.max_delay))))
-        if timing is not None and self.version >= 3:
+        if timing is not None:
             for prev, s in zip([None] + out[:-1], out):
                 self.fit(notes, timing, s, prev)
         for a, s, travel in zip(out[:-1], out[1:], travels):   # strokes shortened to share the time between crossings
@@ -559,7 +463,7 @@ class ScriptedRight:
         for cross in (sw.cross, onset + self.early_cross):
             if cross < sw.cross and (onset + 0.5 >= sw.cross or onset < 1):
                 continue
-            if cross < sw.cross and self.version >= 4 and prev is not None and cross - prev.cross < self.early_gap:
+            if cross < sw.cross and prev is not None and cross - prev.cross < self.early_gap:
                 continue
             f = sw.frames
             while f >= floor - 1e-9 and best[0] > 0:
@@ -571,9 +475,10 @@ class ScriptedRight:
                 f -= 0.5
         sw.cross, sw.frames = best[1], best[2]
 
-    def _sweep_path(self, notes: Notes, earliest=None) -> np.ndarray:
-        """Version 2's (T + 1, 3) pick path: minimum-jerk in x from stop to stop (each stroke's start and end), below
-        the strings from the first stroke on, lifted at the step boundaries around each string passed over."""
+    def pick_path(self, notes: Notes, earliest=None) -> np.ndarray:
+        """(T + 1, 3) pick point at every control step boundary (guitar frame): minimum-jerk in x from stop to stop
+        (each stroke's start and end, `sweeps`), below the strings from the first stroke on, lifted at the step
+        boundaries around each string passed over. earliest: as for `sweeps`."""
         sw, sigma0 = self.sweeps(notes, earliest)
         T = notes.frames
         t = np.arange(T + 1, dtype=float)
@@ -647,49 +552,13 @@ FINGER_DOFS = [np.arange(11 + 4 * f, 15 + 4 * f) for f in range(4)]
 HOME_POSITION = 5                                              # the home pose's index finger is over fret 5
 POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fit_home's rest posture (left)
 
-# Versions of the left hand's plans (a residual policy keeps the one it was trained on: `EnvConfig.feedforward`):
-# 1 the one-finger-per-fret rule; 2 and a searched fingering where the rule's would not hold a note
-# (`ScriptedLeft.search_fingering`); 3 and quicker lifts and landings between notes shorter than 7 frames; 4 and
-# every change between two notes earlier by up to `lead_frames`, so that a pick at the onset finds the note pressed;
-# 5 and where no fingering holds the whole note (more pressed strings than fingers: barre chords), the one that holds
-# the most of it (`ScriptedLeft.search_partial`); its hand positions are solved in a fixed order, so that a song's plan
-# no longer depends on the songs planned before it in the same process (`ScriptedLeft.position`); 6 and no finger
-# jumps from one string or fret to another between two notes in one position where another fingering holds the note
-# (`ScriptedLeft.search_steady`); 7 and one finger across two neighbouring strings pressed at one fret, where that
-# fingering holds the note (`ScriptedLeft.pair_fingering`); 8 and hand positions chosen for the whole song, with as
-# few and as small moves as cover its notes (`ScriptedLeft.positions`), instead of moving only when a note leaves one;
-# 9 and, where the rule's fingering with pairs does not hold, the cheapest other fingering with them that does;
-# 10 and the first move from the home pose ends by the first onset where that position is near home (`first_frames`);
-# 11 and a hand position change between notes shorter than 12 frames takes less than `shift_frames`, so that each note
-# beside it keeps 2/3 of itself (`shift_min`); 12 and a barre: where no fingering holds a note whose lowest fret
-# is pressed on two strings or more and no string is open, the index laid across all six strings at that fret in a
-# hand pose of its own, the other fingers on the higher frets (`ScriptedLeft.barre_fingering`), kept down over the
-# notes around it that it can play (`ScriptedLeft.extend_barres`); 13 and a note that the fingering of the note
-# before already plays keeps it (`ScriptedLeft.kept`), as a guitarist keeps a chord down over its partial strums;
-# 14 and a fast line glides: between notes of at most `glide_frames` each fret moved beyond the first costs
-# `glide_cost` (`ScriptedLeft.positions`), so the hand follows a chromatic run in one-fret shifts, its finger sliding
-# along the string, instead of jumping four frets at once, and a shift between notes shorter than 9 frames takes
-# `glide_min` frames or more (not `shift_min`); 15 and a hand position change takes its frames from the two notes
-# beside it in proportion to what each can spare, not half from each: a short note before a long one keeps its fret
-# longer, for a strum that reaches it late; 16 and where no hand position spans a note's pressed strings, the partial
-# search tries fewer of them (`ScriptedLeft.search_partial`) instead of leaving the rule's impossible stretch; 17 a
-# trill keeps the lower finger down and pulls off at the boundary (`ScriptedLeft.anchored`); 18 a finger leaving or
-# landing in a shift of up to 2 frets passes above the strings where one beside it is open (`ScriptedLeft.shift_via`);
-# 19 the fingers above a barre may be any of the other three, one of them across two neighbouring strings at one fret
-# (`ScriptedLeft.barre_others`), so a barre holds more of the notes around it; a barre is not kept over notes where
-# that leaves the next note with a hand position change at each end (`ScriptedLeft.squeezes`); and a finger that
-# presses a place in the note before keeps it in the same hand position (`ScriptedLeft.guided`); 20 a finger landing
-# across two strings where the note before presses them lower (a double stop hammered on) lands a frame sooner, where
-# the note before can spare it (`ScriptedLeft.desired`); 21 a finger that lets go of a place for a note that wants its
-# string open, and presses it again after, hovers over its own fret instead of over that place where it cannot get
-# its tip `open_clear` above the strings there (a stretch beyond its own fret; `ScriptedLeft.configs`); and its IK
-# runs to convergence, so that CPUs that round differently plan alike (`CONVERGED`).
-LATEST = 21
-CONVERGED = 21          # from this version on hand positions, barre hands and finger poses are solved by `_fit`
-PAIR = 10               # a finger pressing strings s and s + 1 (0-based) at one fret: "string" PAIR + s (version 7)
-BARRE = 20              # the index across all six strings at one fret: "string" BARRE (version 12)
+# The left planner's version number, written into exported residual policies (`policy.json`'s "feedforward") so
+# that older releases, which kept several planners, play them on this one; the only one `learn.policy` reads.
+PLANNER_VERSION = 21
+PAIR = 10               # a finger pressing strings s and s + 1 (0-based) at one fret: "string" PAIR + s
+BARRE = 20              # the index across all six strings at one fret: "string" BARRE
 BARRE_POSITIONS = 100   # hand position BARRE_POSITIONS + k: the barre hand at fret k (`ScriptedLeft.barre_position`)
-_SOLVED: dict[tuple, tuple[dict, dict, dict]] = {}    # `ScriptedLeft`'s solves from version 5 on, per process
+_SOLVED: dict[tuple, tuple[dict, dict, dict]] = {}    # `ScriptedLeft`'s solves, per process (`ScriptedLeft._constants`)
 
 
 def strings_of(s: int) -> tuple:
@@ -708,10 +577,12 @@ class ScriptedLeft:
     """The fretting hand: one finger per fret in a hand position covering 4 frets.
 
     A hand position p (index finger on fret p) is a whole-hand pose with the fingertips hovering over frets p..p+3
-    and the thumb behind the neck; the position moves only when a note leaves it. Per note, each target string gets
-    the finger of its fret, whose tip is put on p_{i,k} with the capsule resting on the fretboard (tip axis at
-    fretboard top + radius, `press_depth` into it so the PD keeps it down): 3 mm from the string, well inside the 6 mm
-    press distance. The other fingers hover `hover` above the strings, over the next place they will press.
+    and the thumb behind the neck; the positions are planned for the whole song, with as few and as small moves as
+    cover its notes (`positions`). Per note, each target string gets the finger of its fret (`fingering` says where
+    another fingering, a pair or a barre takes over), whose tip is put on p_{i,k} with the capsule resting on the
+    fretboard (tip axis at fretboard top + radius, `press_depth` into it so the PD keeps it down): 3 mm from the
+    string, well inside the 6 mm press distance. The other fingers hover `hover` above the strings, over the next
+    place they will press.
     """
 
     hover = 0.010           # hovering tip axis above string height (the capsule 4 mm above the string)
@@ -719,34 +590,29 @@ class ScriptedLeft:
     clearance = 0.0075      # pressing finger's parts from the other strings (soft)
     lift_frames = 5
     land_frames = 5
-    lead_frames = 2         # version 4: changes lead the onset by up to this, leaving 2/3 of the note before + 2
-    quick_frames = 3        # version 3: a lift or landing beside a note of n < 7 frames takes max(n - 2, this)
-    shift_frames = 10       # hand position change (the wrist slides are slow: kp 10 on 0.2 kg)
-    shift_min = 7           # version 11: ... or 2 (n - 2n/3) + 2 beside a note of n < 12 frames, not below this
-    glide_frames = 6        # version 14: a move between two notes this short costs `glide_cost` per fret beyond one
+    lead_frames = 2         # changes lead the onset by up to this, leaving 2/3 of the note before + 2
+    quick_frames = 3        # a lift or landing beside a note of n < 7 frames takes max(n - 2, this)
+    shift_frames = 10       # hand position change (the wrist slides are slow: kp 10 on 0.2 kg), or beside a note of
+    glide_min = 5           # n < 12 frames 2 (n - 2n/3) + 2, so that each keeps 2/3 of itself, but not below this
+    glide_frames = 6        # a move between two notes this short costs `glide_cost` per fret beyond one
     glide_cost = 1.5
-    glide_min = 5           # ... and a shift between short notes takes this many frames or more
     start_frames = 10       # from the home pose to the first note's position
-    first_frames = 4        # version 10: ... or faster, down to this, to end by a first onset that comes sooner,
+    first_frames = 4        # ... or faster, down to this, to end by a first onset that comes sooner,
     first_reach = 3         # where the first position is this many frets from home or fewer (farther: the wrist lags)
-    pull_lead = 0.3         # version 17: a pull-off's lift starts this fraction of its frames before the boundary
-    via_shift = 2           # version 18: shifts of at most this many frets move fingers clear of open strings
+    pull_lead = 0.3         # a pull-off's lift starts this fraction of its frames before the boundary
+    via_shift = 2           # shifts of at most this many frets move fingers clear of open strings (`shift_via`)
     search_limit = 40       # candidate fingerings tried per note, cheapest first
     check_frames = 10       # a fingering is tried by moving to it from the note before, then holding this long
-    open_clear = 0.008      # version 21: a finger lifted off a string its note wants open keeps its tip this high
+    open_clear = 0.008      # a finger lifted off a string its note wants open keeps its tip this high (`configs`)
 
-    def __init__(self, version: int = LATEST):
-        if not 1 <= version <= LATEST:
-            raise ValueError(f"no left planner version {version} (1..{LATEST})")
-        self.version = version
+    def __init__(self):
         self.guitar = GUITAR
         self.kin = HandKinematics("left")
         self.posture = POSTURE
-        # Solved hand positions, finger poses and simulated trials. From version 5 on each is a function of its key
-        # and the class's constants alone, so the planners of a process share them (`_SOLVED`): the second song,
-        # or version, planned in a process solves only what the first did not. Before version 5 a position is
-        # solved from the nearest one solved so far, so those planners keep their own.
-        solved = _SOLVED.setdefault(self._constants(), ({}, {}, {})) if version >= 5 else ({}, {}, {})
+        # Solved hand positions, finger poses and simulated trials. Each is a function of its key and the class's
+        # constants alone, so the planners of a process share them (`_SOLVED`): the second song planned in a
+        # process solves only what the first did not.
+        solved = _SOLVED.setdefault(self._constants(), ({}, {}, {}))
         self._positions: dict[int, np.ndarray] = solved[0]
         self._fingers: dict[tuple, np.ndarray] = solved[1]
         self._trials: dict[tuple, np.ndarray] = solved[2]
@@ -755,7 +621,7 @@ class ScriptedLeft:
     def _constants(self) -> tuple:
         """What the solves read besides their keys: the class and its geometry and timing constants."""
         return (type(self), self.hover, self.press_depth, self.clearance, self.land_frames, self.shift_frames,
-                self.check_frames, self.posture.tobytes(), self.version >= CONVERGED)
+                self.check_frames, self.posture.tobytes())
 
     # --- geometry helpers
     def fret_mid(self, k: int) -> float:
@@ -779,22 +645,16 @@ class ScriptedLeft:
     # --- inverse kinematics (cached)
     def position(self, p: int) -> np.ndarray:
         """27 joint values of hand position p (cached). Solved together with, for every finger, the configurations
-        pressing string 1 and string 6 at its fret, so that every string is within reach from this pose."""
+        pressing string 1 and string 6 at its fret, so that every string is within reach from this pose; from the
+        neighbouring position towards the home pose's, solved first (from the home pose itself at HOME_POSITION), so
+        that the solution is the same whatever was planned before."""
         if p in self._positions:
             return self._positions[p]
         if p > BARRE_POSITIONS:
             self._positions[p] = self.barre_position(p - BARRE_POSITIONS)
             return self._positions[p]
         k, hand, g = self.kin, self.kin.hand, self.guitar
-        if self.version >= 5:
-            # from the neighbour towards the home pose's position, solved first (from the home pose itself at
-            # HOME_POSITION): the same solution whatever was planned before
-            q0 = k.home if p == HOME_POSITION else self.position(p - 1 if p > HOME_POSITION else p + 1)
-        else:
-            # from the nearest position solved so far: a song's plan depends on what this planner planned before it
-            # (the songs before it in a worker process); kept for the policies trained on these versions' plans
-            near = min(self._positions, key=lambda r: abs(r - p), default=None)
-            q0 = k.home if near is None else self._positions[near]
+        q0 = k.home if p == HOME_POSITION else self.position(p - 1 if p > HOME_POSITION else p + 1)
         frets = [min(p + f, g.n_frets) for f in range(4)]
 
         def residual(z):
@@ -840,19 +700,15 @@ class ScriptedLeft:
         z0 = np.concatenate([q0, q0[11:], q0[11:]])
         lo = np.concatenate([k.lo, k.lo[11:], k.lo[11:]])
         hi = np.concatenate([k.hi, k.hi[11:], k.hi[11:]])
-        if self.version >= CONVERGED:
-            self._positions[p] = _fit(residual, z0, lo, hi, jacobian)[:27]
-        else:
-            sol = least_squares(residual, np.clip(z0, lo + 1e-6, hi - 1e-6), bounds=(lo, hi), ftol=1e-6, xtol=1e-6)
-            self._positions[p] = sol.x[:27]
+        self._positions[p] = _fit(residual, z0, lo, hi, jacobian)[:27]
         return self._positions[p]
 
     def barre_position(self, fret: int) -> np.ndarray:
-        """27 joint values of the barre hand at `fret` (version 12): the index's axis through every string's point
-        in the middle of the fret space, at the height of a pressing fingertip's axis, the other fingertips hovering
-        over the next three frets and the thumb behind the neck; wrist free, from hand position `fret`. From
-        version `CONVERGED` on each string's term is its point's offset from its foot on the nearest index segment:
-        the same cost as the distance, and smooth where it vanishes, so that the solve converges."""
+        """27 joint values of the barre hand at `fret`: the index's axis through every string's point in the middle
+        of the fret space, at the height of a pressing fingertip's axis, the other fingertips hovering over the next
+        three frets and the thumb behind the neck; wrist free, from hand position `fret`. Each string's term is its
+        point's offset from its foot on the nearest index segment: the same cost as the distance, and smooth where it
+        vanishes, so that the solve converges."""
         k, hand, g = self.kin, self.kin.hand, self.guitar
         y = self.fret_mid(fret)
         z = g.fretboard_z + H.RADII["index"][1] - self.press_depth
@@ -862,25 +718,16 @@ class ScriptedLeft:
         def residual(q):
             k.set(q)
             seg = k.segments()[:3]
-            if self.version >= CONVERGED:         # each string's point to its foot on the nearest index segment
-                d2, t = point_segment_distance(points[:, None], seg[None, :, 0], seg[None, :, 1])    # (6, 3)
-                near = np.argmin(d2, axis=1)
-                a, b = seg[near, 0], seg[near, 1]
-                out = [30 * (a + t[np.arange(N_STRINGS), near][:, None] * (b - a) - points).ravel()]
-            else:
-                d2 = np.stack([point_segment_distance(points, a, b)[0] for a, b in seg])    # (3 segments, 6 strings)
-                out = [30 * np.sqrt(d2.min(axis=0) + 1e-12)]
+            d2, t = point_segment_distance(points[:, None], seg[None, :, 0], seg[None, :, 1])    # (6, 3)
+            near = np.argmin(d2, axis=1)                      # each string's point to its foot on the nearest segment
+            a, b = seg[near, 0], seg[near, 1]
+            out = [30 * (a + t[np.arange(N_STRINGS), near][:, None] * (b - a) - points).ravel()]
             out += [10 * (k.site(hand.tips[f]) - self.hover_point(self.mid_x(frets[f]), frets[f])) for f in (1, 2, 3)]
             out.append(10 * (k.site(hand.thumb_tip) - [-0.008 * g.sign, self.fret_mid(frets[1]) + 0.01, -0.02]))
             out.append(0.01 * (q[6:] - self.posture))
             return np.concatenate(out)
 
-        q0 = self.position(fret)
-        if self.version >= CONVERGED:
-            return _fit(residual, q0, k.lo, k.hi)
-        sol = least_squares(residual, np.clip(q0, k.lo + 1e-6, k.hi - 1e-6), bounds=(k.lo, k.hi), ftol=1e-8,
-                            xtol=1e-8)
-        return sol.x
+        return _fit(residual, self.position(fret), k.lo, k.hi)
 
     def finger(self, f: int, p: int, target: tuple, pressing: bool, string: int = -1) -> np.ndarray:
         """4 joint values of finger f (0 = index) in position p putting its tip on `target` (rounded to 0.1 mm).
@@ -910,27 +757,28 @@ class ScriptedLeft:
         x0 = base[dofs]
         lo, hi = k.lo[dofs], k.hi[dofs]
         x = least_squares(residual, np.clip(x0, lo + 1e-6, hi - 1e-6), bounds=(lo, hi)).x
-        if self.version >= CONVERGED:           # to the minimum of the basin that solve found (a stretch has several)
-            x = _fit(residual, x, lo, hi)
+        x = _fit(residual, x, lo, hi)           # to the minimum of the basin that solve found (a stretch has several)
         self._fingers[key] = x
         return x
 
     # --- the schedule
     def fingering(self, notes: Notes):
-        """Per note: (hand position, {finger: (string, fret)}). One finger per fret; the position moves only when a
-        note leaves it, by the least amount. Chords: fingers by fret (index on the lowest), at one fret the string
-        nearer string 6 first; more than 4 pressed strings keep the 4 lowest frets. Later versions search where that
-        does not hold (2, 5), avoid hurried jumps (6), press neighbouring strings at one fret with one finger (7, 9),
-        plan the positions for the whole song (8), bar a fret with the index (12), keep a fingering over the notes
-        it already plays (13), glide along fast lines (14) and leave out a string no hand position spans (16)."""
+        """Per note: (hand position, {finger: (string, fret)}). Hand positions are planned for the whole song
+        (`positions`); in them, one finger per fret (`rule`): chords by fret (index on the lowest), at one fret the
+        string nearer string 6 first, more than 4 pressed strings keep the 4 lowest frets. A note that the fingering
+        of the note before plays keeps it (`kept`); neighbouring strings at one fret take one finger where that holds
+        (`pair_fingering`); fingers do not jump between hurried notes (`search_steady`); where the rule's fingering
+        does not hold the note, the cheapest that does (`search_fingering`), else a barre (`barre_fingering`), else
+        the one that holds the most of it (`search_partial`); a guide finger keeps its place (`guided`), a trill its
+        lower finger (`anchored`); a barre stays over the notes around it that it plays (`extend_barres`)."""
         return self.plans(notes)[0]
 
     def plans(self, notes: Notes):
         """(`fingering`, the same without barres): an idle finger hovers over where it presses next in its hand
         position as if no note were barred (`configs`). With barres taken into account the idle fingers of
-        `sonata`'s notes 41-51 hovered elsewhere, one of them settled on the strings, and 10 notes were lost."""
+        `sonata`'s notes 41-51 would hover elsewhere, one of them settling on the strings: 10 notes lost."""
         p, out, ahead = None, [], []
-        planned = self.positions(notes) if self.version >= 8 else [None] * notes.n
+        planned = self.positions(notes)
         for i in range(notes.n):
             goal = notes.left[i]
             press = sorted(((int(goal[s]), -s) for s in range(N_STRINGS) if goal[s] > 0))[:4]
@@ -939,61 +787,57 @@ class ScriptedLeft:
                 ahead.append((p, {}))
                 continue
             before = next(((q, f) for q, f in reversed(out) if q is not None), None)
-            kept = self.kept(goal, before) if self.version >= 13 else None
+            kept = self.kept(goal, before)
             if kept is not None:
                 p = kept[0]
                 out.append(kept)
                 ahead.append(kept)
                 continue
-            if self.version >= 7:
-                paired = self.pair_fingering(goal, p, before, planned[i])
-                if paired is not None:
-                    p = paired[0]
-                    out.append(paired)
-                    ahead.append(paired)
-                    continue
-            p, fingers = self.rule(press, p, planned[i])
-            if self.version >= 6 and len(press) == 1 and self.hurried(notes, i) and self.jumps(before, p, fingers):
+            paired = self.pair_fingering(goal, planned[i], before)
+            if paired is not None:
+                p = paired[0]
+                out.append(paired)
+                ahead.append(paired)
+                continue
+            p, fingers = self.rule(press, planned[i])
+            if len(press) == 1 and self.hurried(notes, i) and self.jumps(before, p, fingers):
                 p, fingers = self.search_steady(p, fingers, press, goal, before)
-            if self.version >= 2 and not self.holds(p, fingers, goal, before):
+            if not self.holds(p, fingers, goal, before):
                 p, fingers = self.search_fingering(p, fingers, press, goal, before)
                 barre = None
-                if self.version >= 12 and not self.holds(p, fingers, goal, before):
+                if not self.holds(p, fingers, goal, before):
                     barre = self.barre_fingering(goal, before)
-                if self.version >= 5 and not self.holds(p, fingers, goal, before):     # also for `ahead` under a barre
+                if not self.holds(p, fingers, goal, before):        # also for `ahead` under a barre
                     p, fingers = self.search_partial(p, fingers, goal, before)
                 if barre is not None:
                     out.append(barre)
                     ahead.append((p, fingers))
                     continue
-            if self.version >= 19:
-                fingers = self.guided(p, fingers, press, goal, before)
-            if self.version >= 17:
-                nxt = notes.left[i + 1] if i + 1 < notes.n else None
-                fingers = self.anchored(p, fingers, goal, out[-1] if out else None, nxt)
+            fingers = self.guided(p, fingers, press, goal, before)
+            nxt = notes.left[i + 1] if i + 1 < notes.n else None
+            fingers = self.anchored(p, fingers, goal, out[-1] if out else None, nxt)
             out.append((p, fingers))
             ahead.append((p, fingers))
-        if self.version >= 12:
-            self.extend_barres(notes, out)
+        self.extend_barres(notes, out)
         return _filled(out), _filled(ahead)
 
     def kept(self, goal, before: tuple | None):
-        """Version 13: the fingering of the note before (`before`: position, fingers) where it plays this note too
+        """The fingering of the note before (`before`: position, fingers) where it plays this note too
         (`covers`, `holds`); else None. A partial strum of a chord then keeps the whole chord down, as a guitarist
-        does, where the fingering searched for the note alone regrips (`snow`'s "7 9 9 x x x" after its
+        does, where the fingering searched for the note alone would regrip (`snow`'s "7 9 9 x x x" after its
         "7 9 9 8 7 7": every finger lifted and landed again, both notes lost). Keeping only the fingers that press
-        the note, the others lifted to hover ahead, played 3 of the 15 official songs worse than keeping them all and
+        the note, the others lifted to hover ahead, plays 3 of the 15 official songs worse than keeping them all and
         none better."""
         if before is None or before[0] >= BARRE_POSITIONS or not before[1] or not covers(before[1], goal):
             return None
         return before if self.holds(*before, goal, before) else None
 
     def guided(self, p: int, fingers: dict, press: list, goal, before: tuple | None) -> dict:
-        """Version 19: where a place pressed in the note before, in the same hand position, is pressed again by
+        """Where a place pressed in the note before, in the same hand position, is pressed again by
         another finger, the cheapest fingering that leaves it under the same finger (`fingerings`) if one holds the
-        note; else `fingers`. A guitarist keeps such a guide finger down. `sonata`'s bass, string 6 at fret 1 under
-        `1 x x 0 1 0` then `1 3 x x x x`, went from the middle finger to the index, which crossed the open string 3
-        and left string 2 before its note had held 2/3 of itself."""
+        note; else `fingers`. A guitarist keeps such a guide finger down. Moved from the middle finger to the index,
+        `sonata`'s bass, string 6 at fret 1 under `1 x x 0 1 0` then `1 3 x x x x`, would take the index across the
+        open string 3 and off string 2 before its note had held 2/3 of itself."""
         if before is None or before[0] != p:
             return fingers
         stay = {sk: f for f, sk in before[1].items() if sk in fingers.values()}
@@ -1004,13 +848,13 @@ class ScriptedLeft:
         return found[1] if found is not None else fingers
 
     def anchored(self, p: int, fingers: dict, goal, prev: tuple | None, nxt) -> dict:
-        """Version 17, a trill: a single note above the note before on the same string, in the same hand position,
+        """A trill: a single note above the note before on the same string, in the same hand position,
         and the next note back at that lower fret alone, keeps the lower finger down under it (the highest fret
         sounds), as a guitarist does. Going back down is then a pull-off: the lower fret sounds the moment the upper
         finger lifts, so the lift waits for the boundary (`desired`) instead of leaving early for a landing that lags.
-        `flight_of_the_bumblebee1`'s trills (string 3, frets 6-7-6 in 5-frame notes) lifted the lower finger and
-        pressed it again, and each upper note held 3 of the 4 frames it needs. Anchoring wherever a line goes up a
-        string kept fingers from getting ready for the notes after it (`beethoven_virus` lost a note)."""
+        Lifting the lower finger and pressing it again, `flight_of_the_bumblebee1`'s trills (string 3, frets 6-7-6 in
+        5-frame notes) hold each upper note 3 of the 4 frames it needs. Anchoring wherever a line goes up a string
+        keeps fingers from getting ready for the notes after it (`beethoven_virus` loses a note)."""
         if prev is None or prev[0] != p or len(fingers) != 1 or nxt is None:
             return fingers
         (f, (s, k)), = fingers.items()
@@ -1020,31 +864,19 @@ class ScriptedLeft:
         trial = {**fingers, low[0][0]: low[0][1]}
         return trial if self.holds(p, trial, goal, prev) else fingers
 
-    def rule(self, press: list, p: int | None, planned: int | None = None):
-        """The one-finger-per-fret rule for the pressed (fret, -string) of `press` (fret order, at most 4), coming
-        from hand position p (None: the first note), or in position `planned` (version 8): (position, {finger:
-        (string, fret)})."""
-        lo, hi = press[0][0], press[-1][0]
-        if planned is not None:
-            p = planned
-        elif p is None:
-            p = max(1, min(lo, hi - 3))
-        elif lo < p:
-            p = lo
-        elif hi > p + 3:
-            p = hi - 3 if hi - lo <= 3 else lo
-        p = min(p, self.guitar.n_frets - 3)
+    def rule(self, press: list, p: int):
+        """The one-finger-per-fret rule for the pressed (fret, -string) of `press` (fret order, at most 4) in hand
+        position p (`positions`): (p, {finger: (string, fret)})."""
         return p, _by_fret(press, p)
 
     def positions(self, notes: Notes) -> list:
-        """Version 8: the hand position of each note (None: nothing pressed) for the whole song at once, by dynamic
-        programming: each note's position covers its pressed frets (a span of more than 4 frets: its lowest, as
-        the rule), and the song has as few moves as can be (each costs 1 + 0.05 per fret), from the home pose's
-        position; of plans as good, the one that moves latest, as the rule does. The rule moves only when a note
-        leaves the position, by the least amount, so an ascending line moves at every note where one move would
-        cover it. Version 14: between two notes of at most `glide_frames` each fret of a move beyond the first costs
-        `glide_cost` more, since the wrist cannot cross four frets in the slack of a 5-frame note but follows one fret
-        a note, the finger sliding along its string."""
+        """The hand position of each note (None: nothing pressed) for the whole song at once, by dynamic
+        programming: each note's position covers its pressed frets (a span of more than 4 frets: its lowest), and the
+        song has as few moves as can be (each costs 1 + 0.05 per fret), from the home pose's position; of plans as
+        good, the one that moves latest. Moving only when a note leaves the position, by the least amount, an
+        ascending line would move at every note where one move covers it. Between two notes of at most
+        `glide_frames` each fret of a move beyond the first costs `glide_cost` more, since the wrist cannot cross
+        four frets in the slack of a 5-frame note but follows one fret a note, the finger sliding along its string."""
         top = self.guitar.n_frets - 3
         allowed = []
         for goal in notes.left:
@@ -1056,9 +888,8 @@ class ScriptedLeft:
             allowed.append(list(range(max(1, hi - 3), min(lo, top) + 1)) if hi - lo <= 3 else [min(lo, top)])
 
         short = (np.diff(notes.onset) <= self.glide_frames) & np.array([a is not None for a in allowed], bool)
-        fast = np.zeros(notes.n, bool)      # version 14: note i and the note before, both pressed, both short
-        if self.version >= 14:
-            fast[1:] = short[1:] & short[:-1]
+        fast = np.zeros(notes.n, bool)      # note i and the note before, both pressed, both short
+        fast[1:] = short[1:] & short[:-1]
 
         def move(q, p, i):          # a later move costs a little less: of equal plans, the one that moves late
             d = abs(q - p)
@@ -1079,20 +910,19 @@ class ScriptedLeft:
                 out[i], p = p, back[i][p]
         return out
 
-    def pair_fingering(self, goal, p: int | None, before: tuple | None, planned: int | None = None):
-        """Version 7: where two neighbouring strings are pressed at one fret, the rule's fingering with one finger
-        across each such pair (`PAIR`; pairs taken from string 6 up), if it holds the whole note (`holds`); else
-        None. It frees a finger for the rest of a chord (five or six pressed strings with four fingers) and lets a
-        double stop move as one finger."""
+    def pair_fingering(self, goal, p: int, before: tuple | None):
+        """Where two neighbouring strings are pressed at one fret, the rule's fingering in hand position p with one
+        finger across each such pair (`PAIR`; pairs taken from string 6 up), if it holds the whole note (`holds`);
+        else the cheapest fingering with those pairs that does (the rule's order of fingers at one fret can cross
+        them), or None. It frees a finger for the rest of a chord (five or six pressed strings with four fingers) and
+        lets a double stop move as one finger."""
         units = _paired(sorted((int(goal[s]), -s) for s in range(N_STRINGS) if goal[s] > 0))
         if len(units) == int(np.sum(goal > 0)) or len(units) > 4:
             return None
-        q, fingers = self.rule(sorted(units), p, planned)
+        q, fingers = self.rule(sorted(units), p)
         if self.holds(q, fingers, goal, before):
             return q, fingers
-        if self.version >= 9:              # the rule's order of fingers at one fret can cross them: search
-            return self.first_holding(self.fingerings(sorted(units), q), goal, before)
-        return None
+        return self.first_holding(self.fingerings(sorted(units), q), goal, before)
 
     def pose(self, p: int, fingers: dict) -> np.ndarray:
         """27 joint values of position p with `fingers` ({finger: (string, fret)}) pressing, the others hovering over
@@ -1147,9 +977,10 @@ class ScriptedLeft:
         return self._trials[key]
 
     def barre_fingering(self, goal, before: tuple | None, low: int | None = None):
-        """Version 12: the index barred across all six strings at fret `low` (default: the note's lowest, pressed
-        on two strings or more; `barre_position`), the higher frets by the rule with the other three fingers, if
-        that holds the note (`holds`); else None. Never where a string must ring open (the barre would stop it)."""
+        """The index barred across all six strings at fret `low` (default: the note's lowest, pressed on two
+        strings or more; `barre_position`), the higher frets by the rule with the other three fingers, if that holds
+        the note (`holds`); else the cheapest other fingers above the barre that do (`barre_others`), or None. Never
+        where a string must ring open (the barre would stop it)."""
         goal = np.asarray(goal)
         if np.any(goal == -1) or (low is None and not np.any(goal > 0)):
             return None
@@ -1164,17 +995,15 @@ class ScriptedLeft:
         p = BARRE_POSITIONS + low
         if self.holds(p, fingers, goal, before):
             return p, fingers
-        if self.version >= 19:
-            return self.first_holding(self.barre_others(rest, low), goal, before)
-        return None
+        return self.first_holding(self.barre_others(rest, low), goal, before)
 
     def barre_others(self, rest: list, low: int) -> list:
-        """Version 19: [(cost, barre position, fingers)] for the frets above a barre at `low` (`rest`: (fret,
+        """[(cost, barre position, fingers)] for the frets above a barre at `low` (`rest`: (fret,
         -string), fret order), where the rule's fingers do not hold: any of the other three fingers, in fret order,
         two neighbouring strings at one fret also as one finger across them (`PAIR`). `sonata`'s `1 x x 3 3 1` under
-        the barre of the notes beside it: ring and pinky on strings 3 and 2 at fret 3 pressed fret 1 on string 2
-        (a pinky this short lies flat); the ring finger across both holds, where the hand had left the barre for a
-        fingering of its own and back, and the note held 6 of its 18 frames."""
+        the barre of the notes beside it: ring and pinky on strings 3 and 2 at fret 3 press fret 1 on string 2
+        (a pinky this short lies flat); the ring finger across both holds, where leaving the barre for a fingering of
+        its own and back holds the note 6 of its 18 frames."""
         paired, out = _paired(rest), []
         for units in ([paired] if paired != rest else []) + [rest]:
             for chosen in itertools.combinations((1, 2, 3), len(units)):
@@ -1184,11 +1013,10 @@ class ScriptedLeft:
         return out
 
     def extend_barres(self, notes: Notes, out: list) -> None:
-        """Version 12: a barre stays for the notes around it that it can play (no open string, every pressed fret
-        within the barre's four; `barre_fingering` at its fret holds them), as a guitarist keeps a barre down over
-        a passage instead of moving the whole hand out of it and back for a note or two (in `out`, in place).
-        Version 19 ends an extension before a note it would leave with a hand position change at each end
-        (`squeezes`)."""
+        """A barre stays for the notes around it that it can play (no open string, every pressed fret within the
+        barre's four; `barre_fingering` at its fret holds them), as a guitarist keeps a barre down over a passage
+        instead of moving the whole hand out of it and back for a note or two (in `out`, in place). An extension
+        ends before a note it would leave with a hand position change at each end (`squeezes`)."""
         barres = [i for i, (p, _) in enumerate(out) if p is not None and p > BARRE_POSITIONS]
         for i in barres:
             low = fret_of(out[i][0])
@@ -1201,16 +1029,16 @@ class ScriptedLeft:
                         break
                     was[j], out[j] = out[j], barre
                     j += step
-                while self.version >= 19 and was and self.squeezes(out, i, j, step, was):
+                while was and self.squeezes(out, i, j, step, was):
                     j -= step
                     out[j] = was.pop(j)
 
     @staticmethod
     def squeezes(out: list, i: int, j: int, step: int, was: dict) -> bool:
-        """Version 19: does extending the barre of note i over the notes `was` (index: their own plan) save no hand
+        """Does extending the barre of note i over the notes `was` (index: their own plan) save no hand
         position change, and move one onto note j, the first it does not cover, which has one at its other end?
-        Kept through `sonata`'s `x 2 x x 3 3`, the barre left the next note, `x 3 x x 3 3` in position 1, between a
-        change from the barre and one to position 3: it held 10 of its 18 frames."""
+        Kept through `sonata`'s `x 2 x x 3 3`, the barre would leave the next note, `x 3 x x 3 3` in position 1,
+        between a change from the barre and one to position 3: it would hold 10 of its 18 frames."""
         n = len(out)
         if not (0 <= j < n and 0 <= j + step < n) or out[j + step][0] == out[j][0]:
             return False
@@ -1218,17 +1046,16 @@ class ScriptedLeft:
         return sum(a != b for a, b in zip(old, old[1:])) == 1
 
     def search_partial(self, p0: int, fingers0: dict, goal, before: tuple | None):
-        """Where no fingering holds the whole note (version 5; `search_fingering` found none): of the cheapest
-        `search_limit` fingerings of any min(4, n) of its n pressed strings (`fingerings`), the one that holds the
-        most strings of the note (`held`), the rule's own (p0, fingers0) among them. A six-string barre played as
-        four of its strings scores F1 0.8 (precision 1, recall 4/6), where a fingering that slips scores nothing.
-        Version 16: where no hand position spans those strings (a note over seven frets), fingerings of one string
-        fewer, and so on."""
+        """Where no fingering holds the whole note (`search_fingering` found none): of the cheapest `search_limit`
+        fingerings of any min(4, n) of its n pressed strings (`fingerings`), the one that holds the most strings of
+        the note (`held`), the rule's own (p0, fingers0) among them. A six-string barre played as four of its strings
+        scores F1 0.8 (precision 1, recall 4/6), where a fingering that slips scores nothing. Where no hand position
+        spans those strings (a note over seven frets), fingerings of one string fewer, and so on."""
         pressed = [(int(goal[s]), -s) for s in range(N_STRINGS) if goal[s] > 0]
         cands = []
-        for k in range(min(4, len(pressed)), 0, -1):      # version 16: fewer strings where no position spans them
+        for k in range(min(4, len(pressed)), 0, -1):      # fewer strings where no position spans them
             cands = [c for subset in itertools.combinations(pressed, k) for c in self.fingerings(sorted(subset), p0)]
-            if cands or self.version < 16:
+            if cands:
                 break
         cands.sort(key=lambda c: c[0])
         best, best_n = (p0, fingers0), self.held(p0, fingers0, goal, before)
@@ -1255,9 +1082,9 @@ class ScriptedLeft:
         return out
 
     def hurried(self, notes: Notes, i: int) -> bool:
-        """Is the change into note i too quick for a finger to move between strings (version 6)? A move takes
-        `lift_frames` + 1 frames; it fits where the note before and note i can spare the third of each that need not
-        be held. Notes shorter than 7 frames have the quicker moves of version 3."""
+        """Is the change into note i too quick for a finger to move between strings? A move takes `lift_frames` + 1
+        frames; it fits where the note before and note i can spare the third of each that need not be held. Notes
+        shorter than 7 frames have quicker moves (`quick_frames`)."""
         if i == 0:
             return False
         n_a, n_b = (notes.onset[j + 1] - notes.onset[j] for j in (i - 1, i))
@@ -1272,7 +1099,7 @@ class ScriptedLeft:
                 and any(f in before[1] and before[1][f][0] != s for f, (s, _) in fingers.items()))
 
     def search_steady(self, p0: int, fingers0: dict, press: list, goal, before: tuple):
-        """Version 6: where the rule's fingering makes a finger jump (`jumps`), the cheapest fingering in the same
+        """Where the rule's fingering makes a finger jump (`jumps`), the cheapest fingering in the same
         position without a jump that holds the note (`holds`); none holds: the rule's own."""
         steady = [c for c in self.fingerings(press, p0) if c[1] == p0 and not self.jumps(before, p0, c[2])]
         return self.first_holding(steady, goal, before) or (p0, fingers0)
@@ -1294,7 +1121,9 @@ class ScriptedLeft:
     def configs(self, notes: Notes, plan, ahead=None):
         """Per note: the 27 joint values (wrist and thumb of its position, each finger pressing or hovering over the
         next place it presses in `ahead`, default `plan`) and, per finger, a via configuration for a same-finger move
-        (or None)."""
+        (or None). A finger that lets go of a place for a note that wants its string open, and presses it again
+        after, hovers over its own fret instead where over that place it cannot lift its tip `open_clear` above the
+        strings (a stretch beyond its own fret): there it stayed within the press distance and sounded the string."""
         ahead = plan if ahead is None else ahead
         g = self.guitar
         out = []
@@ -1317,7 +1146,7 @@ class ScriptedLeft:
                 home = self.hover_point(self.mid_x(hk), hk)
                 target = home if nxt is None else self.hover_point(float(self.press_point(*nxt, f)[0]), nxt[1])
                 q[FINGER_DOFS[f]] = self.finger(f, p, _key(target), False)
-                if (self.version >= 21 and nxt is not None and nxt[0] < BARRE and i > 0 and plan[i - 1][0] == p
+                if (nxt is not None and nxt[0] < BARRE and i > 0 and plan[i - 1][0] == p
                         and plan[i - 1][1].get(f) == nxt and any(notes.left[i][j] < 0 for j in strings_of(nxt[0]))
                         and self.tip_height(q, f) < self.open_clear):
                     q[FINGER_DOFS[f]] = self.finger(f, p, _key(home), False)
@@ -1331,10 +1160,13 @@ class ScriptedLeft:
 
     def desired(self, notes: Notes) -> np.ndarray:
         """(T + 1, 27) joint targets. Row j is the pose after control step j - 1; note i owns rows onset_i + 1 ..
-        onset_{i+1}. Each change is timed against the note boundary tb = onset_i + 0.5 (version 4: up to
-        `lead_frames` earlier): a press that cannot spoil the previous note lands early, one that can lands right
-        after tb; a lift that cannot spoil the next note waits, one that can is released before tb; hand position
-        changes are centred on tb (version 15: split around it in proportion to the frames each note can spare)."""
+        onset_{i+1}. Each change is timed against the note boundary tb = onset_i + 0.5, up to `lead_frames` earlier
+        where the note before can spare it: a press that cannot spoil the previous note lands early, one that can
+        lands right after tb (a double stop hammered on a frame sooner, where the note before can spare it); a lift
+        that cannot spoil the next note waits, one that can is released before tb, a pull-off's at tb; lifts and
+        landings beside notes shorter than 7 frames are quicker (`quick_frames`). A hand position change takes its
+        frames from the notes on either side of tb in proportion to what each can spare, and fewer between short
+        notes (`glide_min`); the first move, from the home pose, ends by an early first onset (`first_frames`)."""
         plan, ahead = self.plans(notes)
         cfg = self.configs(notes, plan, ahead)
         T = notes.frames
@@ -1346,39 +1178,33 @@ class ScriptedLeft:
             tb = notes.onset[i] + 0.5
             if i == 0:
                 start = self.start_frames
-                if self.version >= 10 and abs(fret_of(plan[0][0]) - HOME_POSITION) <= self.first_reach:
+                if abs(fret_of(plan[0][0]) - HOME_POSITION) <= self.first_reach:
                     first = next((j for j in range(notes.n) if np.any(notes.left[j] != 0)), 0)
                     start = min(start, max(self.first_frames, int(notes.onset[first])))   # a song that starts at once
                 for gi, dofs in enumerate(groups):
                     events[gi].append((0.0, float(start), q[dofs], None))
                 continue
             dur = notes.onset[i] - notes.onset[i - 1]           # the note before
-            if self.version >= 4:                # move before the onset, into the slack of the note before
-                tb -= min(self.lead_frames, max(0, _spare(dur) - 2))
+            tb -= min(self.lead_frames, max(0, _spare(dur) - 2))     # before the onset, into the note before's slack
             q_prev = cfg[i - 1][0]
             (p_a, f_a), (p_b, f_b) = plan[i - 1], plan[i]
             goal_a, goal_b = notes.left[i - 1], notes.left[i]
             short = min(notes.onset[i + 1] - notes.onset[i], dur)
             if p_a != p_b:
-                w = self.shift_frames
-                if self.version >= 11:          # between short notes: quicker, so that each keeps 2/3 of itself
-                    w = min(w, max(self.shift_min if self.version < 14 else self.glide_min, 2 * _spare(short) + 2))
-                t0 = tb - w / 2
-                if self.version >= 15:          # from each note in proportion to the frames it can spare
-                    sa, sb = _spare(dur), _spare(notes.onset[i + 1] - notes.onset[i])
-                    t0 = tb - w * sa / (sa + sb) if sa + sb > 0 else t0
+                # between short notes quicker, so that each keeps 2/3 of itself
+                w = min(self.shift_frames, max(self.glide_min, 2 * _spare(short) + 2))
+                sa, sb = _spare(dur), _spare(notes.onset[i + 1] - notes.onset[i])
+                # from each note in proportion to the frames it can spare
+                t0 = tb - w * sa / (sa + sb) if sa + sb > 0 else tb - w / 2
                 for gi, dofs in enumerate(groups):
-                    via = (self.shift_via(gi - 1, plan[i - 1], plan[i], goal_a, goal_b)
-                           if self.version >= 18 and gi > 0 else None)
+                    via = self.shift_via(gi - 1, plan[i - 1], plan[i], goal_a, goal_b) if gi > 0 else None
                     late = via is not None and gi - 1 in f_a and gi - 1 not in f_b     # a lift: press to the end
                     events[gi].append((t0 + w / 2 if late else t0, t0 + w, q[dofs], via))
                 for f in set(f_a) & set(f_b):                  # same finger, same string: slide along it
                     if f_a[f][0] == f_b[f][0] != BARRE:
                         slides.append((t0, t0 + w, f, f_b[f][0], f_a[f][1], f_b[f][1]))
                 continue
-            lift, land = self.lift_frames, self.land_frames
-            if self.version >= 3:
-                lift, land = (min(x, max(self.quick_frames, short - 2)) for x in (lift, land))
+            lift, land = (min(x, max(self.quick_frames, short - 2)) for x in (self.lift_frames, self.land_frames))
             for f in range(4):
                 dofs = FINGER_DOFS[f]
                 if np.allclose(q[dofs], q_prev[dofs]):
@@ -1391,13 +1217,13 @@ class ScriptedLeft:
                     s, k = a
                     D = lift
                     t0 = tb + 0.5 if _harmless(goal_b, s, k) else tb - 0.5 - 0.4 * D
-                    if self.version >= 17 and _pull_off(f_a, f_b, s, goal_b):    # the fret below sounds at once
+                    if _pull_off(f_a, f_b, s, goal_b):                  # the fret below sounds at once
                         t0 = tb - 0.5 - self.pull_lead * D
                 elif b is not None:                                     # land
                     s, k = b
                     D = land
                     t0 = tb - 1.5 - D if _harmless(goal_a, s, k) else tb + 1.0 - 0.6 * D
-                    if self.version >= 20 and PAIR <= s < BARRE and all(0 < goal_a[j] < k for j in strings_of(s)):
+                    if PAIR <= s < BARRE and all(0 < goal_a[j] < k for j in strings_of(s)):
                         t0 -= min(1, _spare(dur))       # a double stop hammered on: pressed a frame sooner
                 else:                                                   # hover somewhere else
                     D = land
@@ -1434,15 +1260,16 @@ class ScriptedLeft:
         return out
 
     def shift_via(self, f: int, a: tuple, b: tuple, goal_a, goal_b):
-        """Version 18: finger f's via configuration for a hand position change from a to b (position, fingers), or
+        """Finger f's via configuration for a hand position change from a to b (position, fingers), or
         None. A finger that leaves its string, or lands on a new one, passes 7 mm above the place it presses (the
         new one, else the old one), as within a position (`configs`). Joined straight in joint space while the wrist
-        moves, such fingers crossed the next string: in `spring_overture`'s `10 0 0` -> `8 0 0` (position 9 to 8) the
-        middle finger leaving fret 10 and the index landing on fret 8 pressed string 2, which both notes want open,
-        for 3 frames after the change. Only where a string beside the finger is open in either note: everywhere, the
-        straight path played five official songs better; and only in shifts of up to `via_shift` frets: in jumps the
-        detour took the 48 held-out songs from 0.8114 to 0.8011. A finger that only leaves keeps pressing through the
-        first half of the shift (`desired`); lifted at once, spring's long notes lost a frame of their hold."""
+        moves, such fingers cross the next string: in `spring_overture`'s `10 0 0` -> `8 0 0` (position 9 to 8) the
+        middle finger leaving fret 10 and the index landing on fret 8 would press string 2, which both notes want
+        open, for 3 frames after the change. Only where a string beside the finger is open in either note: elsewhere
+        the straight path plays five official songs better; and only in shifts of up to `via_shift` frets: in jumps
+        the detour takes the 48 held-out songs from 0.8114 to 0.8011. A finger that only leaves keeps pressing through
+        the first half of the shift (`desired`); lifted at once, spring's long notes would lose a frame of their
+        hold."""
         (p_a, f_a), (p_b, f_b) = a, b
         old, new = f_a.get(f), f_b.get(f)
         if (max(p_a, p_b) >= BARRE_POSITIONS or old == new or (old and new and old[0] == new[0])
@@ -1494,6 +1321,27 @@ class ScriptedLeft:
         return LeftTiming(out, press)
 
 
+def constants(hand: str) -> str:
+    """What plans of `hand` ("left" or "right") are made with, as text: the source of the modules that make them
+    (this one, the kinematics, the scoring rules and the world they plan in), its planner's class constants, the
+    module's, the scene's control timing and the tracker's defaults. The plan cache's keys hash it
+    (`motion.feedforward`), so that a plan made by other code or with other constants is not reused."""
+    cls = ScriptedLeft if hand == "left" else ScriptedRight
+    own = {k: v for k, v in sorted(vars(cls).items()) if not k.startswith("_") and isinstance(v, (int, float))}
+    tracker = {k: p.default for k, p in inspect.signature(Tracker.__init__).parameters.items()
+               if p.default is not p.empty}
+    common = {"control_hz": S.CONTROL_HZ, "substeps": S.SUBSTEPS, "home_position": HOME_POSITION,
+              "posture": POSTURE.tolist(), "pair": PAIR, "barre": BARRE, "barre_positions": BARRE_POSITIONS}
+    return repr((_source_digest(), mujoco.__version__, cls.__name__, own, tracker, common))
+
+
+@functools.cache
+def _source_digest() -> str:
+    modules = (sys.modules[__name__], scoring, detect, H, S, GUITAR.__class__, HandKinematics, point_segment_distance)
+    files = sorted({inspect.getsourcefile(m) for m in modules})
+    return hashlib.sha256(b"".join(Path(f).read_bytes() for f in files)).hexdigest()
+
+
 @functools.cache
 def _press_fn():
     return jax.jit(lambda segs: detect.pressed_frets(segs, GUITAR))
@@ -1522,7 +1370,7 @@ def _by_fret(press: list, p: int, first: int = 0) -> dict:
 
 def _paired(press: list) -> list:
     """The pressed (fret, -string) of `press` (fret order) with each two neighbouring strings at one fret as one unit,
-    (fret, -(PAIR + s)) for strings s and s + 1, taken from string 6 up (version 7)."""
+    (fret, -(PAIR + s)) for strings s and s + 1, taken from string 6 up."""
     out, j = [], 0
     while j < len(press):
         (k, ms), nxt = press[j], press[j + 1] if j + 1 < len(press) else None
@@ -1548,7 +1396,7 @@ def _filled(plan: list) -> list:
 
 def covers(fingers: dict, goal) -> bool:
     """Does this fingering play the left goal as the env detects it: each string pressed at its fret k > 0 (by a
-    finger there and none higher up), no open string (-1) pressed; free strings (0) may be pressed (version 13)."""
+    finger there and none higher up), no open string (-1) pressed; free strings (0) may be pressed."""
     top = np.zeros(N_STRINGS, int)
     for s, k in fingers.values():
         for j in strings_of(s):
@@ -1557,7 +1405,7 @@ def covers(fingers: dict, goal) -> bool:
 
 
 def _pull_off(f_a: dict, f_b: dict, s: int, goal_b) -> bool:
-    """Version 17: does a finger lifting from string s uncover one that stays down on it at the next note's fret?"""
+    """Does a finger lifting from string s uncover one that stays down on it at the next note's fret?"""
     return s < PAIR and goal_b[s] > 0 and any(f_a.get(g) == v == (s, int(goal_b[s])) for g, v in f_b.items())
 
 

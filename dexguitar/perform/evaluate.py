@@ -213,10 +213,9 @@ def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str |
     if size < len(songs) and (cfg.feedforward or cfg.right_feedforward):   # plan every song in one pool; the
         every = TL.batch(timelines)                                           # chunks read the plans' disk cache
         if cfg.feedforward:
-            FF.plan_songs(every, cfg.rest_frames, version=int(cfg.feedforward))
+            FF.plan_songs(every, cfg.rest_frames)
         if cfg.right_feedforward:
-            FF.plan_songs(every, cfg.rest_frames, version=int(cfg.right_feedforward), hand="right",
-                          after=FF.left_plans(every, cfg))
+            FF.plan_songs(every, cfg.rest_frames, hand="right", after=FF.left_plans(every, cfg))
     results = {}
     for start in range(0, len(songs), size):
         part = songs[start:start + size]

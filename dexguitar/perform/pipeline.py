@@ -4,8 +4,8 @@ Stages, per group of songs (all the songs together by default, or each song alon
 
   left    a left-hand policy trained on the group's songs as written (no fret shift, no tempo change: the authors'
           song-specific recipe, reference §3.4), warm-started from `left_init` (default: the shipped left hand of the
-          15 official songs; None: from scratch, best with `experiments/left_songs.py` as its config, or
-          with `experiments/left_residual.py` a residual on the IK planner)
+          15 official songs; None: from scratch, best with the config `left_songs`, or with `left_residual` a
+          residual on the IK planner)
   right   the general right hand (`right_mixed`) trained further on the group's picking, as written
   sync    a synchronizer of the two on the group's songs (paper Sec. 4)
   eval    every song of the group by the paper's rules: each hand alone, both before and after synchronization
@@ -34,7 +34,8 @@ import numpy as np
 
 from dexguitar.errors import UserError
 from dexguitar.learn import policy as PO
-from dexguitar.learn.run import load_config, train
+from dexguitar.configs import load_config
+from dexguitar.learn.run import train
 from dexguitar.learn.sync import SyncTrainer
 from dexguitar.learn.trainer import Trainer
 from dexguitar.motion import load_motion
@@ -42,8 +43,9 @@ from dexguitar.motion.kinematics import reference_frames
 from dexguitar.music import load_song
 from dexguitar.music import timeline as TL
 from dexguitar.perform.evaluate import dumps, evaluate, evaluate_synchronizer
+from dexguitar.shipped import policies_dir
 
-ROOT = Path(__file__).resolve().parents[2]
+POLICIES = policies_dir()
 STAGES = ("left", "right", "sync")
 
 
@@ -51,11 +53,14 @@ STAGES = ("left", "right", "sync")
 class Recipe:
     """How each stage trains. Minutes are wall time on the device, compilation included."""
 
-    left_config: str = str(ROOT / "experiments" / "left_finetune.py")
-    right_config: str = str(ROOT / "experiments" / "right_songs.py")
-    sync_config: str = str(ROOT / "experiments" / "sync_hold.py")
-    left_init: str | None = str(ROOT / "models" / "policies" / "left_official15")
-    right_init: str = str(ROOT / "models" / "policies" / "right_mixed")
+    left_config: str = "left_finetune"         # a name in dexguitar/configs/ or a .py file (`load_config`)
+    right_config: str = "right_songs"
+    sync_config: str = "sync_hold"
+    left_set: tuple[str, ...] = ()             # KEY=VALUE overrides of each stage's config (`--set`)
+    right_set: tuple[str, ...] = ()
+    sync_set: tuple[str, ...] = ()
+    left_init: str | None = str(POLICIES / "left_official15")
+    right_init: str = str(POLICIES / "right_mixed")
     left_minutes: float = 3.0
     right_minutes: float = 2.0
     sync_minutes: float = 5.0
@@ -189,7 +194,8 @@ class Songbook:
         timelines = [TL.from_song(s) for s in self.songs]
         hand = "left" if stage == "left" else "right"
         config = {"left": r.left_config, "right": r.right_config, "sync": r.sync_config}[stage]
-        cfg, env_cfg = load_config(config, hand="duet" if stage == "sync" else hand, num_envs=r.envs,
+        sets = {"left": r.left_set, "right": r.right_set, "sync": r.sync_set}[stage]
+        cfg, env_cfg = load_config(config, sets, hand="duet" if stage == "sync" else hand, num_envs=r.envs,
                                    iterations=r.iterations)
         resume = (run_dir / "config.json").exists()
         meta = {"songs": [s.title for s in self.songs]}

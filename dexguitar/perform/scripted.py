@@ -16,7 +16,7 @@ import numpy as np
 from dexguitar import envs
 from dexguitar.envs import scoring
 from dexguitar.motion import feedforward as FF
-from dexguitar.motion.planner import LATEST, Notes, ScriptedLeft, ScriptedRight, Tracker
+from dexguitar.motion.planner import Notes, ScriptedLeft, ScriptedRight, Tracker
 from dexguitar.music import library
 from dexguitar.music import timeline as TL
 from dexguitar.world import hands as H
@@ -38,11 +38,10 @@ class ScriptedPlayer:
     gravity, neck and body symmetric in x), so its actions are the right-handed plan mirrored joint by joint.
     """
 
-    def __init__(self, env, version: int = LATEST):
+    def __init__(self, env):
         self.env = env
         self.roles = env.roles
-        self.version = version
-        self.left = ScriptedLeft(version)                  # its kinematics judge when the left hand is ready
+        self.left = ScriptedLeft()                         # its kinematics judge when the left hand is ready
         self.right = ScriptedRight()
         self.tracker = Tracker("right") if "right" in self.roles else None
         self.flip = {r: H.mirror_qpos(np.ones(H.N_DOF), r) if env.config.mirror else np.ones(H.N_DOF)
@@ -60,7 +59,7 @@ class ScriptedPlayer:
         note's strings only once the simulated left hand holds the note (the duet's strict gate counts an earlier
         pick as wrong)."""
         notes = [w if isinstance(w, Notes) else Notes.from_window(w) for w in windows]
-        left = (FF.plan_all([(n.left, n.pick, n.onset, self.version) for n in notes], log=lambda m: None)
+        left = (FF.plan_all([(n.left, n.pick, n.onset) for n in notes], log=lambda m: None)
                 if "left" in self.roles else [None] * len(notes))
         out = []
         for n, planned in zip(notes, left):

@@ -15,7 +15,7 @@ S=${SONG:-.data/official/spring_overture.json}
 sync1() {
   t=$SECONDS
   D sync --song $S --left models/policies/left_general --right models/policies/right_mixed \
-    --config experiments/sync_hold.py --out /tmp/runs/$1 --stop-after-calls 1 --no-eval "${@:2}" > $OUT/$1.log 2>&1
+    --config sync_hold --out /tmp/runs/$1 --stop-after-calls 1 --no-eval "${@:2}" > $OUT/$1.log 2>&1
   echo "$1: rc $? $((SECONDS - t)) s; $(grep -E 'training chunk' $OUT/$1.log | cut -c1-160)" | tee -a $OUT/times.txt
 }
 if [ "$1" = seeds ]; then

@@ -20,7 +20,7 @@ group() {
     # A song already started (here or by another group) is left alone: its run and log stay as they are.
     [ -e /tmp/runs/gsync/$n ] && { echo "$n skipped: /tmp/runs/gsync/$n exists"; continue; }
     t0=$(date +%s)
-    dexguitar sync --song /tmp/official/$s.json --out /tmp/runs/gsync/$n --config experiments/sync_hold.py \
+    dexguitar sync --song /tmp/official/$s.json --out /tmp/runs/gsync/$n --config sync_hold \
       --max-minutes "${MIN:-2.5}" "${seed[@]}" > /tmp/runs/gsync/$n.log 2>&1
     echo "$n rc=$? seconds=$(( $(date +%s) - t0 )) gpu=${CUDA_VISIBLE_DEVICES:-all}"
   done

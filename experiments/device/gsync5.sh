@@ -8,7 +8,7 @@ export PYTHONPATH=/tmp/site:$PWD PYTHONUNBUFFERED=1 DEXGUITAR_CACHE=/tmp/xla DEX
 S=$1; SEED=${2:-1}
 t=$SECONDS
 python3 -c "import sys; from dexguitar.cli import main; sys.exit(main())" sync --song .data/official/$S.json \
-  --config experiments/sync_hold.py --max-minutes 5 --seed $SEED --out /tmp/runs/$S 2>&1 | tee $OUT/$S.log | grep -v "it/s" | tail -5
+  --config sync_hold --max-minutes 5 --seed $SEED --out /tmp/runs/$S 2>&1 | tee $OUT/$S.log | grep -v "it/s" | tail -5
 echo "command seconds: $((SECONDS - t))" | tee -a $OUT/$S.log
 cp /tmp/runs/$S/eval.json $OUT/$S.eval.json; cp /tmp/runs/$S/metrics.jsonl $OUT/$S.metrics.jsonl
 tar czf $OUT/$S.policy.tgz -C /tmp/runs/$S policy config.json

@@ -19,7 +19,7 @@ nvidia-smi -L > $OUT/gpus.txt || true
 E=${ENVS:-4096}                 # envs per GPU
 train() {
   ${PY:-python3} -c "import sys; from dexguitar.cli import main; sys.exit(main())" train --hand left --style general \
-    --procedural ${SONGS:-256} --config ${CONFIG:-experiments/left_general_anchored.py} "$@"
+    --procedural ${SONGS:-256} --config ${CONFIG:-left_general_anchored} "$@"
 }
 MODE=$1; shift
 if [ "$MODE" = bench ]; then

@@ -1,5 +1,0 @@
-"""A tiny CPU configuration: 4 envs, 2 iterations; for tests and notebooks."""
-from dexguitar.learn.trainer import TrainConfig
-
-CONFIG = TrainConfig(num_envs=4, horizon=4, minibatch=8, epochs=2, disc_steps=2, disc_buffer=64, disc_batch=16,
-                     iterations=2, iterations_per_call=1)
