@@ -209,7 +209,7 @@ def _sync(args) -> int:
     left, right = left or recorded.get("left"), right or recorded.get("right")
     song_files = song_files or recorded.get("song_files")
     track = args.track if args.track is not None else recorded.get("track")
-    if not (left or right) and not args.resume:        # GSync: the general pair (issue 11)
+    if not (left or right) and not args.resume:        # GSync: the general pair
         left, right = _general_pair("sync")
     if not (left and right):
         raise UserError("sync: give --left and --right (exported policies or run directories), or neither for the "
@@ -310,7 +310,7 @@ def _eval(args) -> int:
     return 0
 
 
-# The general pair (issue 11): both hands on their IK planners (zero residuals). `sync` takes `right_mixed`, a trained
+# The general pair: both hands on their IK planners (zero residuals). `sync` takes `right_mixed`, a trained
 # right hand, instead: a synchronizer shifts a policy's latent, and a zero residual's output does not depend on it.
 GENERAL = {"left": POLICIES / "left_general", "right": POLICIES / "right_general"}
 SYNC_RIGHT = POLICIES / "right_mixed"

@@ -1,4 +1,4 @@
-"""Why two hands that each play a song well play it worse together (issue 10: "right hand in the duet").
+"""Why two hands that each play a song well play it worse together.
 
 Reads the per-note reports that `dexguitar play` writes (`<out>-report.json`) and counts, over the notes where the
 both-hands F1 is below 1, the verdict and its reason (`perform/play.py`: "picked before the press", "late",
@@ -6,7 +6,8 @@ both-hands F1 is below 1, the verdict and its reason (`perform/play.py`: "picked
 rollout, played that note right. A note that both hands play right alone but not together was lost to timing
 between them: what a synchronizer is for.
 
-    dexguitar play --ckpt models/policies/sync_official15 --unsynchronized --song S.json --frames-only --out /tmp/S
+    dexguitar play --left models/policies/left_general --right models/policies/right_mixed --song S.json \
+        --frames-only --out /tmp/S
     python experiments/duet_gap.py /tmp/*-report.json
 """
 import argparse

@@ -1,15 +1,15 @@
-"""Zero-shot evaluation of a general left hand (issue 11, item 3) on songs it never trained on: the authors' official
-songs. Writes, into --out:
+"""Zero-shot evaluation of a general left hand on songs it never trained on: the authors' official songs. Writes,
+into --out:
 
 - `general_left.json`: one object per song (`song`, `left`, `chords_above_0.8`, `chords`, `right`, ...) and a last
   one with `song: "overall"`; `left` there is the mean over songs, `left_notes` the mean over all notes;
-  `chords_above_0.8` counts every distinct chord of every song once (strictly above 0.8, as the issue asks);
+  `chords_above_0.8` counts every distinct chord of every song once (strictly above 0.8);
 - `general_left.md`: the same table, and the left hand's F1 split by where on the neck, how many strings, how long
   and how far from the last position each note is (what to train more of);
 - `general_left_chords_left.png`, `general_left_chords_right.png`: the per-chord F1 histograms (the paper's Fig. 5).
 
   .venv/bin/python experiments/general_left.py --left runs/left-general/policy \
-      --notes ../shared/data/official/notes --out experiments/results
+      --notes ../shared/data/official/notes --out out/general_left
 """
 import argparse
 import json
@@ -74,7 +74,7 @@ def main():
     p.add_argument("--left", required=True, help="the general left hand: an exported policy or a run directory")
     p.add_argument("--right", default="models/policies/right_mixed", help="the general right hand")
     p.add_argument("--notes", required=True, help="a folder of tabs the hands never trained on")
-    p.add_argument("--out", default="experiments/results")
+    p.add_argument("--out", default="out/general_left")
     args = p.parse_args()
     compilation_cache()
     paths = sorted(Path(args.notes).glob("*.json"))
@@ -109,7 +109,7 @@ def main():
                                    f"{h} hand ({name(getattr(args, h))}), per chord, official songs, zero-shot")
     fmt = lambda v: "–" if v is None else f"{v:.3f}"                      # noqa: E731
     pct = lambda v: "–" if v is None else f"{v:.0%}"                      # noqa: E731
-    md = ["# The general pair on songs it never trained on (issue 11)", "",
+    md = ["# The general pair on songs it never trained on", "",
           "```bash", f".venv/bin/python experiments/general_left.py --left {args.left} --right {args.right} "
           f"--notes {args.notes} --out {args.out}", "```", "",
           f"left: `{args.left}` ({overall['left_samples'] or 0:,} samples); right: `{args.right}`", "",

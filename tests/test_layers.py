@@ -1,4 +1,4 @@
-"""The package's floors (README, "Where the data flows"): a module imports only from its own floor or lower ones,
+"""The package's floors (README, "How it fits together"): a module imports only from its own floor or lower ones,
 and no modules import each other in a loop. Read from the source with `ast`, function-local imports included."""
 import ast
 from pathlib import Path

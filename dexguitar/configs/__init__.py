@@ -14,10 +14,11 @@ overrides a field of CONFIG, `--set env.KEY=VALUE` one of ENV (`load_config`).
   left_finetune          left_songs warm-started from another left hand (`dexguitar songs`' left stage)
   right_songs            the right hand on given songs' picking, warm-started (`dexguitar songs`' right stage)
   left_residual          the left hand as a residual on the IK planner (one GPU)
+  left_general           the general left hand by PPO alone, the paper's recipe (about 8e8 samples)
   left_general_residual  left_residual on the general procedural material
   left_general_anchored  the general left hand held to the planner by a prior (`make train-left-general`)
 
-The experiments that tried other recipes keep theirs as files in the repository's experiments/ (`--config PATH`).
+Any other recipe is a .py file defining CONFIG (and optionally ENV), given as `--config PATH`.
 """
 from __future__ import annotations
 

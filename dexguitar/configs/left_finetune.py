@@ -2,7 +2,7 @@
 models/policies/left_official15, the one left hand of the 15 official songs): the recipe of left_songs (PPO clip
 0.3) with a 25-iteration critic warm-up, since the critic starts fresh (right_songs: PPO on a random critic's
 advantages undoes a warm-started actor). On super_mario this reached song F1 0.971 in 4.2 minutes, compilation
-included, against 0.419 after 3 minutes from scratch (experiments/results/official_songs.md). One GPU."""
+included, against 0.419 after 3 minutes from scratch (one H100; docs/results.md, "The learned hands"). One GPU."""
 import dataclasses
 
 from dexguitar.configs import left_songs as _base

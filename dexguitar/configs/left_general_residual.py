@@ -1,4 +1,4 @@
-"""The general left hand as a residual on the IK planner (issue 11): the recipe of left_residual (one GPU) on the
+"""The general left hand as a residual on the IK planner : the recipe of left_residual (one GPU) on the
 balanced procedural material (`dexguitar train --hand left --style general --procedural N`), none of the authors'
 songs.
 

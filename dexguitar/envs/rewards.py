@@ -104,8 +104,8 @@ def margin_reward(segments, goal, guitar: Guitar = GUITAR):
 
     Not in the paper. Eq. 4's press term is flat within millimetres of its target (exp(-1000 d^2) is 0.98 at 4 mm)
     and r_correct is a step, so nothing in Eq. 7 pays for playing a note with room to spare, where the IK planner
-    leaves under 1 mm in 2-38 % of its held presses (experiments/press_margins.py). It did not make PPO improve the
-    planner (experiments/left_general_margin.py)."""
+    leaves under 1 mm in 2-38 % of its held presses. It did not make PPO improve the planner (docs/results.md, "The
+    learned hands")."""
     return jnp.clip(press_margins(segments, goal, guitar) / MARGIN_SCALE, -1.0, 1.0)
 
 

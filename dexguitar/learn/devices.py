@@ -1,4 +1,4 @@
-"""Where a run's arrays live, on one device or many (issue 12)."""
+"""Where a run's arrays live, on one device or many."""
 from __future__ import annotations
 
 import jax

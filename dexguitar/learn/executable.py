@@ -1,11 +1,11 @@
-"""The training chunk's compiled program, ready sooner (issue 10, "compile once").
+"""The training chunk's compiled program, ready sooner.
 
 - A first run compiles the chunk in a thread while the main thread makes the first state. The chunk needs only the
   state's shapes (`jax.eval_shape`), and XLA compiles outside Python's lock, so the two compiles overlap. On one H100,
-  a GSync chunk was compiled 66 s after the trainer was built instead of 92 s (`experiments/compile_overlap.py`).
+  a GSync chunk was compiled 66 s after the trainer was built instead of 92 s (docs/benchmarks.md, "Compilation").
 - The compiled chunk is kept on disk beside JAX's persistent cache (`<cache>/chunks/`). A later run of the same code,
   package versions, devices, XLA flags, config and shapes loads it without tracing or lowering it: ready 10.1 s after
-  the trainer was built instead of 24.3 s (`experiments/device/chunk_cache.sh`). A later run in the same process
+  the trainer was built instead of 24.3 s (docs/benchmarks.md, "Compilation"). A later run in the same process
   reuses it.
 
 The file's key hashes everything the program is made of except the values of its arguments (songs, reference

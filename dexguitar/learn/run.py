@@ -44,7 +44,7 @@ def compact(path, leaf) -> bool:
     """What `resume/` keeps of a train state: the networks, normalizers, random key and iteration, and the
     optimizers' scalars (the adaptive actor rate, the warm-up schedule's count). The envs start afresh, the
     discriminators' replay buffers refill, and Adam restarts (`restart_adam`). The general left hand's state (4096
-    envs) is 280 MiB; this part of it 20 MiB (19.5 MB on disk, 19.4 MB as a .tgz: `experiments/checkpoint_size.py`)."""
+    envs) is 280 MiB; this part of it 20 MiB (19.5 MB on disk, 19.4 MB as a .tgz: docs/benchmarks.md, "Checkpoints")."""
     name = getattr(path[0], "name", None)
     return name in KEPT or (name == "opt" and np.size(leaf) == 1)
 
@@ -66,7 +66,7 @@ def compilation_cache(directory=None) -> Path:
 
 
 # On an H100 the GSync training chunk compiled in 113 s with XLA's Triton GEMMs and in 63-73 s without them (their
-# autotuning), running 3.5 % slower (experiments/benchmarks.md, "XLA flags").
+# autotuning), running 3.5 % slower (docs/benchmarks.md, "Compilation").
 FAST_COMPILE = "--xla_gpu_enable_triton_gemm=false"
 
 
@@ -235,7 +235,7 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
     log = (log or (lambda msg: print(msg, file=sys.stderr))) if where.main else (lambda msg: None)
     if jax.default_backend() == "cpu" and cfg.num_envs >= CPU_ENVS:
         log(f"warning: {cfg.num_envs} envs on a CPU: XLA:CPU's batched Cholesky factorizations (MJX) can wait on "
-            "each other forever at this size (seen with 512 envs on 2 cores, experiments/cpu_lapack_hang.py); the "
+            "each other forever at this size (seen with 512 envs on 2 cores; docs/training.md); the "
             "CPU config uses 4 (--config cpu_smoke)")
     run = RunDir(out_dir, where.main)
     try:
@@ -351,7 +351,7 @@ def _loop(trainer, run, where, state, data, build, iterations, progress, stop_af
             resume_state.save(it, state)
             # the saves' blocking seconds (copying to the host, waiting for the chunk before's writes), outside
             # `seconds` and before the next row's `wall` (saved whole before the writes went to the background, they
-            # cost 1.35 s a chunk on one H100 and 3.8 s on 4: experiments/benchmarks.md, "Training on several GPUs")
+            # cost 1.35 s a chunk on one H100 and 3.8 s on 4: docs/benchmarks.md, "Several GPUs")
             summary.update(ckpt_s=t2 - t1, compact_s=time.perf_counter() - t2)
             if where.main:
                 with open(run.metrics, "a") as f:

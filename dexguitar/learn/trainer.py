@@ -326,7 +326,7 @@ class Trainer:
         """PPO epochs over `batch`. `split`: the sharding that spreads a minibatch's samples over the devices. A
         minibatch gathered by a random permutation is otherwise whole on every device, and each device computed the
         whole minibatch's gradient: on 4 H100s an iteration grew as if each did the update of all 4
-        (experiments/benchmarks.md, "Training on several GPUs")."""
+        (docs/benchmarks.md, "Several GPUs")."""
         cfg = self.config
         n = batch["obs"].shape[0]
         n_mb = max(n // cfg.minibatch, 1)
@@ -362,7 +362,7 @@ class Trainer:
                     if name == "policy" and cfg.kl_target:
                         # the KL of this minibatch before its step sets the step's rate. In a warm-up the step is 0
                         # and the rate stays as it is: the KL of a still actor is 0, and adapting to it would climb
-                        # to the upper bound and throw the first real step far (the sixteenth session's KL 52,000).
+                        # to the upper bound and throw the first real step far (a KL of 52,000).
                         warm = ts.iteration < cfg.actor_warmup
                         new_opt["lr"] = jnp.where(warm, opt["lr"], adapt_lr(opt["lr"], log["kl"], cfg.kl_target))
                         rate = jnp.where(warm, 0.0, new_opt["lr"])

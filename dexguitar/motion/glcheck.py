@@ -1,6 +1,6 @@
 """Can this machine render? The offscreen OpenGL (OSMesa or EGL) that the videos use, found by trying a real one.
 
-A library on disk proves nothing (issue #14: `libEGL.so.1` is only the loader, there may be no driver behind it), so
+A library on disk proves nothing (`libEGL.so.1` is only the loader, there may be no driver behind it), so
 each backend is tried in a child process that makes a context, draws into it and reads the pixel back. A child,
 because PyOpenGL fixes its platform when it is first imported: a failed try in this process would spoil the next
 one. OSMesa comes first: on a CPU it draws a frame about twice as fast as Mesa's EGL. `MUJOCO_GL=osmesa|egl`

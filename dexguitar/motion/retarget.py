@@ -188,7 +188,7 @@ def _is_number(field: str) -> bool:
 class Registration:
     """How the guitar's marker frame maps onto our guitar frame. The marker positions on the real guitar are not
     documented; these constants come from the marker photo (`mocap/doc/marker_guitar.png`) and were checked against
-    where the fretting fingertips land (experiments/retarget.md):
+    where the fretting fingertips land (docs/retarget.md):
 
     nut_along        nut, in capture metres along the marker frame's y from the midpoint of markers 1 and 2. In the
                      photo that midpoint lies one fret spacing (~11.5 mm) on the body side of fret 22 (at 466.1 mm

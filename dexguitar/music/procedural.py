@@ -891,7 +891,7 @@ def coverage(songs: Iterable[Song]) -> dict:
 
 STYLES = {  # (hand, style) -> (generator, default number of songs)
     ("left", "exercises"): (left_exercises, 64),
-    ("left", "general"): (left_general, 2000),   # coverage keeps rising up to ~2000 songs (experiments/results)
+    ("left", "general"): (left_general, 2000),   # coverage keeps rising up to ~2000 songs (docs/results.md)
     ("right", "steady"): (right_patterns, 64),
     ("right", "paper"): (paper_right_patterns, 64),
 }

@@ -12,9 +12,9 @@ from dexguitar.world.scene import SUBSTEPS
 mjx = _quiet_mjx()
 
 # A GPU's default float32 matmul is TF32 (a 10-bit mantissa, relative error 2^-11): a point half a metre from the
-# origin moves by a quarter of a millimetre, a fair part of a press's depth. On an H100 the zero-residual left hand
-# (planner 11) played snow at F1 0.924 with TF32 and 0.990 in full float32, as on the CPU (turkish_march 0.974 and
-# 0.993; experiments/results/general_left/session19). Networks keep the default: only the world needs it.
+# origin moves by a quarter of a millimetre, a fair part of a press's depth. On an H100 a zero-residual left hand
+# played snow at F1 0.924 with TF32 and 0.990 in full float32, as on the CPU (turkish_march 0.974 and 0.993;
+# docs/benchmarks.md, "Float32 in the env"). Networks keep the default: only the world needs it.
 PRECISION = "highest"
 
 

@@ -35,7 +35,7 @@ NECK_AFFINITY, BODY_AFFINITY = 1, 2
 
 # Home poses for a right-handed player (guitar frame): the left hand around fret 5 with the thumb behind the neck,
 # the right hand over the strings between the end of the fretboard and the bridge holding the pick.
-# 27 values each in `hands.joints` order; found with `dexguitar.world.scene.fit_home` and rounded.
+# 27 values each in `hands.joints` order; found by least squares on fingertip and pick targets, and rounded.
 HOME = {
     "left": np.array([0.0907, -0.0181, -0.014, -0.1298, 1.0632, -2.0536, 0.6452, -0.9723, 0.7358, 0.6063, 0.4211,
                       0.4382, -0.0543, 0.7912, 0.4892, 0.4323, -0.0521, 1.1287, 0.7207, 0.5472, -0.0616, 1.139,

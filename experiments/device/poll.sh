@@ -2,8 +2,8 @@
 # Wait (WAIT seconds, default 540) while the commands that start.sh began run (their process groups), then show its log's tail and copy logs to $OUT.
 # A `train` run (a directory with resume/) comes back at every poll without its full checkpoint, split into 15 MB
 # parts (<run>.tgz.aa, .ab, ...), so that a lost machine loses little; its policy export only with COLLECT=1.
-# With COLLECT=1 also: each song's stage dirs of a `songs` run (no checkpoints), each run of a sweep
-# (experiments/left_sweep/run.sh: its policy, metrics and log), and the compilation cache.
+# With COLLECT=1 also: each song's stage dirs of a `songs` run (no checkpoints), each run of a sweep (a folder of
+# runs under /tmp/runs: its policy, metrics and log), and the compilation cache.
 WAIT=${WAIT:-540}; t=0
 running() { for p in /tmp/runs/*.pid; do kill -0 -- -$(cat $p) 2>/dev/null && return 0; done; return 1; }
 while running && [ $t -lt $WAIT ]; do sleep 10; t=$((t+10)); done

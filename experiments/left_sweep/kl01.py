@@ -1,9 +1,0 @@
-"""A point of the left-hand recipe sweep (results/left_sweep.md): experiments/left_sweep/base.py with
-kl_target=0.01."""
-import dataclasses
-import os
-import runpy
-
-_base = runpy.run_path(os.path.join(os.path.dirname(__file__), "base.py"))
-CONFIG = dataclasses.replace(_base["CONFIG"], kl_target=0.01)
-ENV = _base["ENV"]
