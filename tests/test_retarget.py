@@ -188,7 +188,7 @@ def test_csv_reader_errors(tmp_path):
 @pytest.mark.skipif(not (MOCAP / "Arpeggio.csv").exists(), reason="the authors' motion capture is not here: "
                     "../shared/data/official/mocap/Arpeggio.csv beside the clone")
 def test_arpeggio_first_frames(tmp_path):
-    """The first half second of the real capture: the fit error stays at what we measured (experiments/retarget.md:
+    """The first half second of the real capture: the fit error stays at what we measured (docs/retarget.md:
     6.2 mm left, 3.4 mm right, mean over markers) and the motions load for training."""
     paths, rep = RT.retarget_file(MOCAP / "Arpeggio.csv", tmp_path / "arpeggio.npz", "both", stop=T)
     means = {side: h["markers"]["all"]["mean"] for side, h in rep["hands"].items()}

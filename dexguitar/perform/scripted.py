@@ -1,6 +1,6 @@
 """The scripted player and its F1 table: the IK planner (`dexguitar.motion.planner`, no learning) plays songs through
 the envs (`ScriptedPlayer`), scored by the envs themselves: the embedded single-note songs
-(`experiments/scripted_f1.md`) or any tabs, e.g. the authors' songs (`experiments/results/scripted_official.md`).
+(`docs/results.md`) or any tabs, e.g. the authors' songs.
 
 Run `python -m dexguitar.perform.scripted [--envs left,right,duet] [--songs a,b | --tabs FILE_OR_FOLDER ...]`.
 """
