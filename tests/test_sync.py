@@ -264,7 +264,7 @@ def test_sync_command_end_to_end(tmp_path, capsys, monkeypatch, export_compiles)
 
 def test_shipped_general_left_hand_is_the_planner_with_noise_it_survives():
     """A synchronizer trains on actions sampled from the frozen hands' Gaussians. The shipped zero residual's mean is
-    the planner (0); its std must stay where the planner keeps its F1 (results/planner_noise.md: 0.002 costs 0.02 of
+    the planner (0); its std must stay where the planner keeps its F1 (docs/results.md: 0.002 costs 0.02 of
     window F1, 0.02 costs 0.36), not the log-std head's zero bias (std 1) nor the residual recipe's 0.02."""
     from dexguitar.cli import POLICIES
     params, meta = PO.load(POLICIES / "left_general")

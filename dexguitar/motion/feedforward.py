@@ -1,8 +1,8 @@
 """The planner's motion of a whole song, as a feedforward that a residual policy corrects (left hand; right hand too).
 
-Why: the IK planner (`motion.planner`, no learning) plays the authors' songs at a mean left F1 of 0.87
-(results/scripted_official.md), while PPO from the home pose needs minutes per song and 2e8 samples for a general hand
-that still plays them at 0.19. With `EnvConfig(feedforward=True)` the env adds the planner's action of the current
+Why: the IK planner (`motion.planner`, no learning) plays the authors' songs at a mean left F1 of 0.993
+(`docs/results.md`), while PPO from the home pose needs minutes per song and 2e8 samples for a general hand that
+still plays them at 0.19. With `EnvConfig(feedforward=True)` the env adds the planner's action of the current
 song frame to the left hand's action, so a policy whose output starts at zero starts as the planner, and PPO only
 learns the corrections (residual RL). Training windows start in the planned state of their first frame (reference
 state initialization) and end with their last note, so the feedforward always belongs to the notes being played.

@@ -550,7 +550,7 @@ def _min_jerk_inverse(frac):
 WRIST_THUMB = np.arange(11)                                    # wrist slides + hinges, thumb (DoF order)
 FINGER_DOFS = [np.arange(11 + 4 * f, 15 + 4 * f) for f in range(4)]
 HOME_POSITION = 5                                              # the home pose's index finger is over fret 5
-POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # fit_home's rest posture (left)
+POSTURE = np.array([0.3, -0.8, 0.8, 0.6, 0.4] + [0.6, 0.0, 1.0, 0.6] * 4)   # the rest posture (left)
 
 # The left planner's version number, written into exported residual policies (`policy.json`'s "feedforward") so
 # that older releases, which kept several planners, play them on this one; the only one `learn.policy` reads.

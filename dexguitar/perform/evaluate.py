@@ -26,8 +26,8 @@ from dexguitar.music import timeline as TL
 
 HANDS = {"left": ("left",), "right": ("right",), "duet": ("left", "right", "both")}
 # Songs a CPU plays at once in the duet. Five or six in one program stalled XLA's CPU run on a 2-core machine every
-# time (the process idle in `device_get`; sixteenth and seventeenth sessions); four or fewer never did. One hand
-# stalled the same way with 48 songs (twentieth session: `--procedural 48`, twice), never with 16 or 32.
+# time it was tried (the process idle in `device_get`); four or fewer never did. One hand stalled the same way with
+# 48 songs (`--procedural 48`, twice), never with 16 or 32.
 CPU_DUET_SONGS = 4
 CPU_HAND_SONGS = 16
 
