@@ -88,9 +88,8 @@ def test_an_interrupted_stage_resumes_with_the_minutes_it_has_left_and_a_done_on
     assert len(recorder.calls) == 1
 
 
-@pytest.mark.parametrize("flag, expected", [([], P.Recipe().left_init), (["--left-init", "none"], None),
-                                            (["--left-init", "my/left"], "my/left")])
-def test_the_songs_command_passes_the_left_start_on(flag, expected, monkeypatch, tmp_path):
+def songs_recipe(args, monkeypatch, tmp_path):
+    """The `Recipe` that `dexguitar songs ARGS` hands to the pipeline (which is not run)."""
     from dexguitar import cli
     seen = {}
 
@@ -99,8 +98,14 @@ def test_the_songs_command_passes_the_left_start_on(flag, expected, monkeypatch,
         (tmp_path / "songs.md").write_text("")
         return [{}]
     monkeypatch.setattr(cli.pipeline, "run_songs", fake_run_songs)
-    assert cli.main(["songs", "ode_to_joy", "--out", str(tmp_path)] + flag) == 0
-    assert seen["recipe"].left_init == expected
+    assert cli.main(["songs"] + args + ["--out", str(tmp_path)]) == 0
+    return seen["recipe"]
+
+
+@pytest.mark.parametrize("flag, expected", [([], P.Recipe().left_init), (["--left-init", "none"], None),
+                                            (["--left-init", "my/left"], "my/left")])
+def test_the_songs_command_passes_the_left_start_on(flag, expected, monkeypatch, tmp_path):
+    assert songs_recipe(["ode_to_joy"] + flag, monkeypatch, tmp_path).left_init == expected
 
 
 class Exports:
@@ -195,17 +200,8 @@ def test_the_minutes_of_a_stage_count_its_judgements(tmp_path):
 
 def test_each_stage_trains_with_its_config_and_overrides(recorder, monkeypatch, tmp_path):
     """`songs --set` reaches every stage, `--set-<stage>` its own; a stage's config is a name in dexguitar/configs/."""
-    from dexguitar import cli
-    seen = {}
-
-    def fake_run_songs(tabs, out, recipe, per_song):
-        seen["recipe"] = recipe
-        (tmp_path / "songs.md").write_text("")
-        return [{}]
-    monkeypatch.setattr(cli.pipeline, "run_songs", fake_run_songs)
-    assert cli.main(["songs", "ode_to_joy", "--out", str(tmp_path), "--set", "seed=3", "--set-sync",
-                     "env.hold_reward=0.5", "--set-sync", "actor_warmup=7"]) == 0
-    recipe = seen["recipe"]
+    recipe = songs_recipe(["ode_to_joy", "--set", "seed=3", "--set-sync", "env.hold_reward=0.5", "--set-sync",
+                           "actor_warmup=7"], monkeypatch, tmp_path)
     assert recipe.left_set == recipe.right_set == ("seed=3",)
     assert recipe.sync_set == ("seed=3", "env.hold_reward=0.5", "actor_warmup=7")
     built = {}
