@@ -1,5 +1,5 @@
 """A residual hand whose residual is zero (`EnvConfig(feedforward=True)` for the left hand, `right_feedforward=True`
-for the right: it plays exactly as the IK planner, `dexguitar/motion/planner.py`), as an exported policy: the start
+for the right: it plays exactly as the IK planner, `dexguitar/planner/`), as an exported policy: the start
 of every residual hand, and the yardstick of a general one, since the planner has seen no song.
 `models/policies/left_general` and `right_general` are such policies (docs/planner.md):
 

@@ -34,7 +34,7 @@ jax.config.update("jax_compilation_cache_dir", str(CACHE))
 jax.config.update("jax_persistent_cache_min_compile_time_secs", 2.0)
 # the commands that tests call (`cli.main`) set their own cache from DEXGUITAR_CACHE: the same one
 os.environ["DEXGUITAR_CACHE"] = str(CACHE)
-# the planner's plans of residual left hands (`motion/feedforward.py`) beside it, not in the user's home
+# the planner's plans of residual left hands (`planner/plans.py`) beside it, not in the user's home
 os.environ.setdefault("DEXGUITAR_PLANS", str(CACHE.parent / "plans"))
 
 

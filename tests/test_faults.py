@@ -472,7 +472,7 @@ def test_impossible_numbers_are_refused_by_the_parser(argv, capsys):
 
 def test_sync_and_play_without_policies_take_the_general_pair(tmp_path, monkeypatch, capsys):
     from dexguitar import cli
-    from dexguitar.motion.planner import PLANNER_VERSION, RIGHT_PLANNER_VERSION
+    from dexguitar.planner import PLANNER_VERSION, RIGHT_PLANNER_VERSION
     assert cli._general_pair("sync") == (str(cli.POLICIES / "left_general"), str(cli.POLICIES / "right_mixed"))
     assert cli._general_pair("play") == (str(cli.POLICIES / "left_general"), str(cli.POLICIES / "right_general"))
     meta = json.loads((cli.POLICIES / "left_general" / "policy.json").read_text())

@@ -1,4 +1,4 @@
-"""The left hand as a residual on the planner (`EnvConfig(feedforward=True)`, `motion/feedforward.py`): a zero residual
+"""The left hand as a residual on the planner (`EnvConfig(feedforward=True)`, `planner/plans.py`): a zero residual
 must play exactly as the scripted player does, and a training window must start in its planned state and read the
 plan frame by frame, or the feedforward belongs to other notes than the ones being played."""
 import json
@@ -17,8 +17,8 @@ import pytest
 from dexguitar import envs
 from dexguitar.errors import UserError
 from dexguitar.learn import policy as PO
-from dexguitar.motion import feedforward as FF
-from dexguitar.motion import planner as PL
+from dexguitar.planner import plans as FF
+from dexguitar import planner as PL
 from dexguitar.perform.scripted import ScriptedPlayer
 from dexguitar.music import cursor as CU
 from dexguitar.music import timeline as TL
@@ -75,7 +75,7 @@ def test_right_zero_residual_plays_as_the_scripted_player(plans):
 def test_window_starts_in_its_planned_state_and_reads_one_frame_per_step(plans, hand):
     ff = {"feedforward": True} if hand == "left" else {"right_feedforward": True}
     config = envs.EnvConfig(shift_prob=0.0, tempo_prob=0.0, **ff)
-    env = envs.make(hand, FF.prepare(plans, config), config)
+    env = envs.make(hand, plans, config)
     core = env.env.env                                  # AutoReset(ChainWindows(LeftEnv))
     assert core.planned and list(core.plans) == [hand]
     plan = core.songs.plan if hand == "left" else core.songs.plan_right
@@ -157,7 +157,7 @@ def test_a_kept_pool_plans_the_next_songs_in_the_same_workers_and_leaves_with_it
     replaced, _ = FF.in_processes(worker_pid, [None], workers=1, keep=True)
     assert replaced != first
     script = tmp_path / "leave.py"
-    script.write_text("import os\nfrom dexguitar.motion import feedforward as FF\n"
+    script.write_text("import os\nfrom dexguitar.planner import plans as FF\n"
                       "def pid(_):\n    return os.getpid()\n"
                       "if __name__ == '__main__':\n"
                       "    print(FF.in_processes(pid, [None], workers=1, keep=True)[0][0], flush=True)\n"
@@ -181,8 +181,9 @@ def test_the_residual_flag_travels_with_the_policy():
     assert "feedforward" not in plain.to_meta() and not PO.PolicySpec.from_meta(plain.to_meta()).feedforward
     with pytest.raises(ValueError, match="no left hand"):
         envs.make("right", [TL.from_song(melody())], envs.EnvConfig(feedforward=True))
-    with pytest.raises(ValueError, match="feedforward.prepare"):        # plans are not made behind the env's back
-        envs.make("left", [TL.from_song(melody())], envs.EnvConfig(feedforward=True))
+    made = envs.make("left", [TL.from_song(melody())], envs.EnvConfig(feedforward=True))     # the env plans the song
+    np.testing.assert_array_equal(made.env.env.songs.plan.action,
+                                  FF.attach(TL.batch([TL.from_song(melody())])).plan.action)
     right = envs.make("right", [TL.from_song(melody())], envs.EnvConfig())
     _, rspec = zero_residual(right.env, "right")
     again = PO.PolicySpec.from_meta(rspec.to_meta())
@@ -192,8 +193,9 @@ def test_the_residual_flag_travels_with_the_policy():
     assert "right_feedforward" not in spec.to_meta()
     with pytest.raises(ValueError, match="no right hand"):
         envs.make("left", [TL.from_song(melody())], envs.EnvConfig(right_feedforward=True))
-    with pytest.raises(ValueError, match="feedforward.prepare"):
-        envs.make("right", [TL.from_song(melody())], envs.EnvConfig(right_feedforward=True))
+    made = envs.make("right", [TL.from_song(melody())], envs.EnvConfig(right_feedforward=True))
+    np.testing.assert_array_equal(made.env.env.songs.plan_right.action,
+                                  FF.attach(TL.batch([TL.from_song(melody())]), hand="right").plan_right.action)
 
 
 def test_a_policy_on_a_planner_version_this_release_no_longer_has_is_refused(tmp_path):

@@ -4,7 +4,7 @@ import ast
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "dexguitar"
-FLOORS = ["errors", "shipped", "world", "music", "envs", "motion", "learn", "configs", "perform", "cli"]   # `dexguitar` itself: floor 0
+FLOORS = ["errors", "shipped", "world", "music", "planner", "envs", "motion", "learn", "configs", "perform", "cli"]   # `dexguitar` itself: floor 0
 
 
 def module_name(path: Path) -> str:
@@ -62,4 +62,7 @@ def test_the_check_sees_the_floors():
     graph = imports()
     assert "dexguitar.music.cursor" in graph["dexguitar.envs.core"]
     assert floor("dexguitar.envs.core") > floor("dexguitar.music.cursor") > floor("dexguitar.world.guitar")
+    # the envs attach the planner's plans themselves, and the planner needs nothing above it
+    assert "dexguitar.planner" in graph["dexguitar.envs"]
+    assert max(floor(m) for p in graph if p.startswith("dexguitar.planner") for m in graph[p]) < floor("dexguitar.envs")
     assert {floor(m) for m in graph["dexguitar.cli"]} >= {FLOORS.index(f) for f in ("music", "envs", "motion", "learn", "configs", "perform")}

@@ -1,5 +1,5 @@
 """The IK planner's plans do not depend on rounding, so that CPUs with other floating-point paths (BLAS kernels, thread
-counts, fused multiply-adds in MuJoCo) plan the same: its IK solves run to convergence (`planner._fit`), and neither
+counts, fused multiply-adds in MuJoCo) plan the same: its IK solves run to convergence (`planner.tracking.converge`), and neither
 the tracker nor the simulated trials amplify a rounding-sized difference into another decision. Shown on one CPU:
 relative perturbations of 1e-13, about what other rounding leaves after a solve, injected into the IK's starts and
 solutions and into the tracker's rollouts, change no decision and move the motion by far less than a millimetre."""
@@ -7,7 +7,9 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from dexguitar.motion import planner as P
+from dexguitar import planner as P
+from dexguitar.planner import left as L
+from dexguitar.planner import tracking as T
 from test_scripted import SONATA_BARRE
 
 NOISE = 1e-13
@@ -30,11 +32,11 @@ def perturb(monkeypatch, seed: int) -> None:
     NOISE, and so does every control the tracker's rollouts try; nothing solved before is reused."""
     rng = np.random.default_rng(seed)
     off = lambda x: np.asarray(x) * (1 + NOISE * rng.standard_normal(np.shape(x)))   # noqa: E731
-    fit, least_squares, rollout = P._fit, P.least_squares, P.rollout.rollout
-    monkeypatch.setattr(P, "_SOLVED", {})
-    monkeypatch.setattr(P, "_fit", lambda residual, x0, *a, **k: off(fit(residual, off(x0), *a, **k)))
-    monkeypatch.setattr(P, "least_squares", lambda fun, x0, **k: least_squares(fun, off(x0), **k))
-    monkeypatch.setattr(P, "rollout", SimpleNamespace(
+    fit, least_squares, rollout = L.converge, L.least_squares, T.rollout.rollout
+    monkeypatch.setattr(L, "_SOLVED", {})
+    monkeypatch.setattr(L, "converge", lambda residual, x0, *a, **k: off(fit(residual, off(x0), *a, **k)))
+    monkeypatch.setattr(L, "least_squares", lambda fun, x0, **k: least_squares(fun, off(x0), **k))
+    monkeypatch.setattr(T, "rollout", SimpleNamespace(
         rollout=lambda models, data, state, control, **k: rollout(models, data, state, off(control), **k)))
 
 
@@ -44,7 +46,7 @@ def test_rounding_sized_perturbations_change_no_decision(monkeypatch):
     apart, `1 x x 3 3 1` held on one of them only, and these perturbations moved the motion by more than 1 rad;
     solved to convergence, they move it by about 1e-7."""
     plan, (desired, q) = decisions(SONATA_BARRE)
-    assert plan[0][0][3] == (P.BARRE_POSITIONS + 1, {0: (P.BARRE, 1), 2: (P.PAIR + 1, 3)})
+    assert plan[0][0][3] == (L.BARRE_POSITIONS + 1, {0: (L.BARRE, 1), 2: (L.PAIR + 1, 3)})
     for seed in (1, 2):
         with monkeypatch.context() as m:
             perturb(m, seed)

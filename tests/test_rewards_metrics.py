@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from dexguitar.envs import rewards as R
-from dexguitar.envs import scoring as M
+from dexguitar.world import scoring as M
 from dexguitar.world.guitar import GUITAR
 
 MUTE_ALL = jnp.zeros(6, jnp.int32)

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from dexguitar import envs
-from dexguitar.motion import feedforward as FF
-from dexguitar.motion.planner import (BARRE, BARRE_POSITIONS, FINGER_DOFS, PAIR, WRIST_THUMB, Notes, ScriptedLeft,
-                                      ScriptedRight)
+from dexguitar.planner import plans as FF
+from dexguitar.planner import Notes, ScriptedLeft, ScriptedRight
+from dexguitar.planner.left import BARRE, BARRE_POSITIONS, FINGER_DOFS, PAIR, WRIST_THUMB
 from dexguitar.perform.scripted import ScriptedPlayer
 from dexguitar.music import timeline as TL
 from dexguitar.music.song import Song, make_note
@@ -151,7 +151,8 @@ def test_strums_so_that_the_left_hand_holds_each_string_long_enough():
 def tracked_presses(hand, notes) -> np.ndarray:
     """(T + 1, 6) frets pressed, as the env detects them, along `hand`'s plan of `notes` tracked in MuJoCo C (row j:
     the state after control step j - 1)."""
-    from dexguitar.motion.planner import Tracker, _pressed
+    from dexguitar.planner import Tracker
+    from dexguitar.planner.left import _pressed
     _, q = Tracker("left").track(hand.desired(notes))
     out = []
     for row in q:
@@ -484,7 +485,7 @@ def test_a_finger_hovers_clear_of_a_string_its_note_wants_open():
     over that place it cannot lift its tip more than 6.7 mm above the strings, and in physics it would stay within
     the press distance and sound string 2 at fret 3 (the song's note 103). It hovers over its own fret there, 10 mm
     up, and on the tracked motion every note has its strings as it asks for 2/3 of itself (6 of 9 frames)."""
-    from dexguitar.envs import scoring
+    from dexguitar.world import scoring
     goal = np.array([[0] * 6, [0, 0, 0, 3, 5, 0], [0, 0, 0, 0, 3, 0], [0, -1, 0, 0, 3, 0], [0, 3, 0, 0, 3, 0],
                      [1, 0, 0, 0, 3, 0], [0, 3, 0, 0, 3, 0], [0, -1, 0, 0, 3, 0], [0, 3, 0, 0, 3, 0],
                      [0, -1, 0, 0, 0, 0]])

@@ -139,7 +139,7 @@ def test_a_cpu_plays_the_duet_a_few_songs_at_a_time(tmp_path, monkeypatch):
     `CPU_DUET_SONGS` songs at a time. Here one at a time, with the shipped general pair: two songs take the
     one-song program, each scores exactly as it does alone, and songs of one title keep apart by their place."""
     from dexguitar.cli import POLICIES
-    from dexguitar.motion import feedforward as FF
+    from dexguitar.planner import plans as FF
     from dexguitar.music import load_song
     from dexguitar.perform import evaluate as EV
     from dexguitar.perform.play import pair as general_pair

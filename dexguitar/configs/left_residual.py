@@ -1,4 +1,4 @@
-"""The left hand as a residual on the IK planner (`EnvConfig(feedforward=True)`, `motion/feedforward.py`): the
+"""The left hand as a residual on the IK planner (`EnvConfig(feedforward=True)`, `planner/plans.py`): the
 env adds the planner's action for the song frame, so the policy, whose output starts near zero, starts as the planner
 (mean left F1 0.993 on the authors' songs) and PPO learns only corrections. The songs as written (the planner plans
 them so), the sizes and PPO clip of left_songs (one GPU), and a 25-iteration critic warm-up (the critic starts fresh;

@@ -7,7 +7,8 @@ from dexguitar.envs.layout import ObsLayout
 from dexguitar.envs.left import LeftEnv
 from dexguitar.envs.right import RightEnv
 from dexguitar.envs.wrappers import AutoReset, ChainWindows, PlayThrough, Wrapper
-from dexguitar.music import timeline as TL
+from dexguitar import planner
+from dexguitar.music.timeline import as_batch
 
 ENVS = {"left": LeftEnv, "right": RightEnv, "duet": DuetEnv}
 
@@ -15,31 +16,18 @@ ENVS = {"left": LeftEnv, "right": RightEnv, "duet": DuetEnv}
 def make(hand: str, songs, config: EnvConfig | None = None, backend: str = "jax", **overrides):
     """The env for `hand` ("left", "right" or "duet") over a song batch (a `Timeline` or a list of them or of
     `Song`s), with its episode logic: training windows chained and auto-reset, or (`config.sequential`) whole songs
-    played through."""
+    played through. The planner's plans that the config's feedforwards ask for are made (or read from their
+    cache) here, unless the songs carry them already."""
     if hand not in ENVS:
         raise ValueError(f"unknown hand {hand!r}; expected one of {', '.join(ENVS)}")
-    songs = as_batch(songs)
     config = dataclasses.replace(config or EnvConfig(episode_frames=1200 if hand == "duet" else 600), **overrides)
     if config.feedforward and "left" not in ENVS[hand].roles:
         raise ValueError(f"EnvConfig.feedforward is the left hand's planned motion; the {hand} env has no left hand")
-    if config.feedforward and songs.plan is None:
-        raise ValueError("EnvConfig.feedforward needs the planner's motion of the songs: "
-                         "dexguitar.motion.feedforward.prepare(songs, config)")
     if config.right_feedforward and "right" not in ENVS[hand].roles:
         raise ValueError(f"EnvConfig.right_feedforward is the right hand's planned motion; the {hand} env has no "
                          "right hand")
-    if config.right_feedforward and songs.plan_right is None:
-        raise ValueError("EnvConfig.right_feedforward needs the right planner's motion of the songs: "
-                         "dexguitar.motion.feedforward.prepare(songs, config)")
-    env = ENVS[hand](songs, config, backend)
+    env = ENVS[hand](planner.prepare(songs, config), config, backend)
     return PlayThrough(env) if config.sequential else AutoReset(ChainWindows(env))
-
-
-def as_batch(songs) -> TL.Timeline:
-    """A song batch: a list of `Song`s or timelines stacked, a batch as it is."""
-    if isinstance(songs, (list, tuple)):
-        return TL.stack([s if isinstance(s, TL.Timeline) else TL.from_song(s) for s in songs])
-    return songs
 
 
 __all__ = ["as_batch", "EnvConfig", "GuitarEnv", "State", "Body", "Picking", "Task", "ObsLayout", "LeftEnv", "RightEnv",

@@ -24,7 +24,7 @@ from flax import struct
 
 from dexguitar import mjx as _quiet_mjx
 from dexguitar.envs import rewards as R
-from dexguitar.envs import scoring
+from dexguitar.world import scoring
 from dexguitar.envs.layout import ObsLayout
 from dexguitar.music import cursor as CU
 from dexguitar.music import timeline as TL
@@ -66,7 +66,7 @@ class EnvConfig:
     hold_reward: float = 0.0             # duet, not in the paper: added to the pick column per string whose
                                          # both-hands hold (rule (3) of both-hands F1) completes in the step
     mirror: bool = False                 # the left-handed player's scene
-    feedforward: bool = False            # the left action is a residual on the planner's (`motion.feedforward`)
+    feedforward: bool = False            # the left action is a residual on the planner's (`planner.plans`)
     right_feedforward: bool = False      # the right action likewise, on the right planner's
     margin_reward: float = 0.0           # not in the paper: added to each string's column times its press margin
                                          # (`rewards.margin_reward`), a smooth measure of how robustly it plays

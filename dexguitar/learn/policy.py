@@ -25,7 +25,7 @@ from dexguitar.envs.layout import ObsLayout
 from dexguitar.errors import UserError
 from dexguitar.learn import checkpoint as C
 from dexguitar.learn import networks as N
-from dexguitar.motion.planner import PLANNER_VERSION, RIGHT_PLANNER_VERSION
+from dexguitar.planner import PLANNER_VERSION, RIGHT_PLANNER_VERSION
 from dexguitar.world.hands import N_DOF
 
 KINDS = ("policy", "synchronizer")
@@ -40,7 +40,7 @@ class PolicySpec:
     hand: str                 # "left", "right" or "duet"
     action_size: int
     layout: ObsLayout
-    feedforward: bool = False     # the left hand's action is a residual on the planner's (`motion.feedforward`)
+    feedforward: bool = False     # the left hand's action is a residual on the planner's (`planner.plans`)
     scale: float = 1.0            # the left hand's network output times this (`networks.Policy.scale`)
     right_feedforward: bool = False   # the right hand's action is a residual on the right planner's
 

@@ -28,7 +28,6 @@ from dexguitar.learn import ppo
 from dexguitar.learn.devices import Placement
 from dexguitar.learn.policy import PolicySpec, act_fn, distribution
 from dexguitar.learn.tracing import FreshJit
-from dexguitar.motion import feedforward as FF
 from dexguitar.music import timeline as TL
 
 
@@ -151,7 +150,7 @@ class Trainer:
         self.config = config
         if not isinstance(songs, TL.Timeline):
             songs = TL.batch(list(songs))
-        self.env = E.make(config.hand, FF.prepare(songs, env_config), env_config)
+        self.env = E.make(config.hand, songs, env_config)
         self.layout = self.env.layout
         self.spec = self.make_spec()
         self.disc_specs = IM.DISCRIMINATORS[config.hand] if reference is not None else {}

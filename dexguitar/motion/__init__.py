@@ -1,9 +1,8 @@
-"""Reference motions: one hand's joint values over time (`Motion`), their files, forward kinematics to the link
-states the envs observe, the IK planner, the authors' clip reader, the shipped default clips and rendering.
+"""Reference motions: one hand's joint values over time (`Motion`), their files, the link states the envs observe,
+the authors' clip reader, the shipped default clips (recorded from `dexguitar.planner`) and rendering.
 
     format      Motion, save / load (.npz, .json), resample, validate
-    kinematics  HandKinematics (guitar-frame FK); link_states, reference_frames, finger_segments, velocities
-    planner     the IK planner: Notes, Tracker, ScriptedLeft / ScriptedRight (played through an env by perform.scripted)
+    kinematics  link_states, reference_frames, finger_segments, velocities (by `world.kinematics`)
     official    read_official_json (the authors' JSON clips, converted to our joints)
     defaults    default_motion(hand), and `python -m dexguitar.motion.defaults` to regenerate the clips
     render      render_motion (PNG strip, or .mp4 with imageio-ffmpeg)

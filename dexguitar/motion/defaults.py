@@ -2,7 +2,7 @@
 
 Why our own clips: motion imitation needs reference link states for both hands, and the authors' motion-capture data
 may not be redistributed. These clips are made here, deterministically, by the IK planner
-(`dexguitar.motion.planner`) playing procedural exercises through MuJoCo C physics:
+(`dexguitar.planner`) playing procedural exercises through MuJoCo C physics:
 
 * left, "scale practice" (`left_scale_practice.npz`, ~40 s): after a 1/8 rest, two-octave major scales in four
   one-finger-per-fret boxes along the neck (G at fret 2, C at 7, F at 12, E at 16), each up and back down in 1/8
@@ -28,7 +28,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from dexguitar.motion import kinematics as K
-from dexguitar.motion import planner as PL
+from dexguitar import planner as PL
 from dexguitar.motion.format import Motion, load, save
 from dexguitar.music import procedural
 from dexguitar.music import timeline as TL

@@ -127,7 +127,7 @@ class MotionRenderer:
         self.data = mujoco.MjData(m)
         mujoco.mj_resetDataKeyframe(m, self.data, 0)
         kin = K.hand_kinematics(motion.hand, mirror)
-        self.qpos = kin.model_qpos(motion)
+        self.qpos = kin.model_qpos(motion.hand, motion.qpos)
         self.qadr = np.asarray(S.hand_index(m, motion.hand).qpos)
         self._screen = Offscreen(m, width, height)
         self.camera = mujoco.MjvCamera()

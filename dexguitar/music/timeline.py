@@ -58,7 +58,7 @@ class Timeline:
     n_frames: jax.Array     # int32 (): length at the written tempo, after rounding
     tempo: jax.Array        # float32 (): effective tempo after rounding
     base_tempo: jax.Array   # float32 (): tempo as written in the song
-    plan: Any = None        # `motion.feedforward.Plan` of the left hand, frame-indexed (`EnvConfig.feedforward`)
+    plan: Any = None        # `planner.Plan` of the left hand, frame-indexed (`EnvConfig.feedforward`)
     plan_right: Any = None  # ... of the right hand (`EnvConfig.right_feedforward`)
 
     @property
@@ -192,3 +192,10 @@ def batch(timelines: Sequence[Timeline], *, songs: int | None = None, notes: int
     empty = jax.tree.map(lambda x: np.zeros(np.shape(x), np.asarray(x).dtype), padded[0]).replace(
         ticks_per_whole=np.int32(1), base_tempo=np.float32(120.0), tempo=np.float32(120.0))
     return _stack(padded + [empty] * (songs - len(padded)))
+
+
+def as_batch(songs) -> Timeline:
+    """A song batch: a list of `Song`s or timelines stacked, a batch as it is."""
+    if isinstance(songs, (list, tuple)):
+        return stack([s if isinstance(s, Timeline) else from_song(s) for s in songs])
+    return songs

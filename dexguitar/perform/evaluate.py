@@ -18,10 +18,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from dexguitar import envs as E
-from dexguitar.envs.scoring import per_note_both
+from dexguitar.world.scoring import per_note_both
 from dexguitar.learn.policy import PolicySpec, act_fn, unsynchronized
 from dexguitar.learn.tracing import fresh_trace
-from dexguitar.motion import feedforward as FF
+from dexguitar import planner
 from dexguitar.music import timeline as TL
 
 HANDS = {"left": ("left",), "right": ("right",), "duet": ("left", "right", "both")}
@@ -213,13 +213,13 @@ def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str |
     if size < len(songs) and (cfg.feedforward or cfg.right_feedforward):   # plan every song in one pool; the
         every = TL.batch(timelines)                                           # chunks read the plans' disk cache
         if cfg.feedforward:
-            FF.plan_songs(every, cfg.rest_frames)
+            planner.plan_songs(every, cfg.rest_frames)
         if cfg.right_feedforward:
-            FF.plan_songs(every, cfg.rest_frames, hand="right", after=FF.left_plans(every, cfg))
+            planner.plan_songs(every, cfg.rest_frames, hand="right", after=planner.left_plans(every, cfg))
     results = {}
     for start in range(0, len(songs), size):
         part = songs[start:start + size]
-        batch = FF.prepare(TL.batch(timelines[start:start + size]), cfg)
+        batch = planner.prepare(TL.batch(timelines[start:start + size]), cfg)
         play = _compiled(hand, cfg, spec, params, batch)
         scores, ended, dur = jax.device_get(play(params, batch))
         for j, song in enumerate(part):

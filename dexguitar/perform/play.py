@@ -5,7 +5,7 @@ Without a synchronizer (`pair`) this is the paper's "before synchronization" per
 its own part of the duet observation and plays on its own clock, so the left hand may press late for the right hand's
 pick. Both players act through `learn.policy` (a pair is a synchronizer with a zero output layer).
 
-Per-note verdicts (the "both hands" rules of `envs/scoring.py`, Sec. 6.1):
+Per-note verdicts (the "both hands" rules of `world/scoring.py`, Sec. 6.1):
 - right: every target picked once, pressed right at the pick and held for 2/3 of the note (both-hands F1 = 1);
 - late: the right notes sounded (every target picked once, in its expected state, nothing else picked) but the last
   of those picks came after the first 1/3 of the note, too late to hold for 2/3 of it;
@@ -28,7 +28,6 @@ import numpy as np
 from dexguitar import envs
 from dexguitar.learn import policy as PO
 from dexguitar.motion import export as EX
-from dexguitar.motion import feedforward as FF
 from dexguitar.motion.glcheck import INSTALL, NoGL
 from dexguitar.music import load_song
 from dexguitar.music import timeline as TL
@@ -75,7 +74,7 @@ def play(song, params, spec: PO.PolicySpec, *, seconds: float | None = None, env
     step 0), not by `song_note`, so a grace rest the env may put before the song (row 0, song note -1) is handled
     whether it is there or not."""
     config = spec.env_config(env_config or envs.EnvConfig().evaluation())
-    env = envs.make("duet", FF.prepare([TL.from_song(song)], config), config)
+    env = envs.make("duet", [TL.from_song(song)], config)
     if not env.config.sequential:
         raise ValueError("play needs an evaluation config (EnvConfig().evaluation()): whole songs from the start")
     key = jax.random.PRNGKey(0) if key is None else key

@@ -1,4 +1,4 @@
-"""The scripted player and its F1 table: the IK planner (`dexguitar.motion.planner`, no learning) plays songs through
+"""The scripted player and its F1 table: the IK planner (`dexguitar.planner`, no learning) plays songs through
 the envs (`ScriptedPlayer`), scored by the envs themselves: the embedded single-note songs
 (`docs/results.md`) or any tabs, e.g. the authors' songs.
 
@@ -14,9 +14,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from dexguitar import envs
-from dexguitar.envs import scoring
-from dexguitar.motion import feedforward as FF
-from dexguitar.motion.planner import Notes, ScriptedLeft, ScriptedRight, Tracker
+from dexguitar.world import scoring
+from dexguitar.planner import plans as FF
+from dexguitar.planner import Notes, ScriptedLeft, ScriptedRight, Tracker
 from dexguitar.music import library
 from dexguitar.music import timeline as TL
 from dexguitar.world import hands as H
@@ -53,7 +53,7 @@ class ScriptedPlayer:
 
     def plans(self, windows) -> list[np.ndarray]:
         """`plan` of each window. The left hand is planned in worker processes with one BLAS thread
-        (`feedforward.plan_all`), as the env's feedforward is, so a table made here plays the plans a residual
+        (`planner.plans.plan_all`), as the env's feedforward is, so a table made here plays the plans a residual
         policy is given (in the 15 official songs' table, plans made in this process with 2 BLAS threads scored
         `sonata_in_f_major_ms84_no14` 0.928, one-thread plans 0.900). With both hands the right hand crosses each
         note's strings only once the simulated left hand holds the note (the duet's strict gate counts an earlier

@@ -1,551 +1,28 @@
-"""The IK planner: hand-made motions that play a song window with our hands, and the scripted player that plays
-them through the envs (no learning).
-
-Why it exists: if motions that put fingertips on the press targets and sweep the pick across the target strings score
-F1 ~ 1 through `envs.make(...)`, then guitar geometry, press / pick detection, note bookkeeping and metrics agree with
-each other (`perform.scripted` prints that table). The same motions, recorded, are the shipped reference clips
-(`motion.defaults`).
-
-How it plays, per hand, before the rollout (`perform.scripted.ScriptedPlayer.plans`):
-1. Keyframes in the guitar frame. Left hand: one-finger-per-fret hand positions covering 4 frets; each note's
-   target strings get a fingertip on p_{i,k} resting on the fretboard, the other fingers hover 10 mm above the
-   strings; where that fingering does not hold a note in a short simulated trial, the cheapest other one that does;
-   one finger across two neighbouring strings at one fret; the index barred across all six strings, in a hand pose
-   of its own. Right hand: the pick stays 3 mm below string height and sweeps from the gap before each note's first
-   target string to the gap after its last, the directions chosen over the whole song (alternate picking on one
-   string, a sweep on to the next string), lifted 4 mm above the strings only over a string it passes without
-   picking it.
-2. Joint targets by least squares on MuJoCo C kinematics (`motion.kinematics.HandKinematics`; cached per keyframe,
-   warm-started, solved to convergence, so that a plan does not depend on the CPU's rounding: `_fit`), joined by
-   minimum-jerk interpolation with per-finger timing that anticipates the onset wherever an early press cannot spoil
-   the previous note.
-3. `Tracker`: the hands are slow PD systems (kp = 10; the 0.2 kg wrist rings for ~0.5 s), so the desired joint
-   trajectory is turned into PD targets by a one-step inverse model, computed by finite differences with
-   `mujoco.rollout` on the same model the env uses. The result is an open-loop action sequence for the env.
-4. Both hands (duet): the left hand is planned and simulated first; the right hand crosses each note's strings only
-   once the simulated left hand holds the note (the duet's strict gate counts earlier picks as wrong), and as soon as
-   it does (both-hands F1 counts the hold for 2/3 of the note from the pick). The envs play the same plans as
-   feedforwards (`motion.feedforward`, `EnvConfig.feedforward` and `right_feedforward`).
-`perform.scripted.ScriptedPlayer.play` rolls the MJX env with those actions (vmapped over songs) and reads the
-per-note scores from `State.info`.
+"""The fretting hand's planner: one-finger-per-fret hand positions planned over the whole song; per note, each
+target string gets a fingertip on its press point resting on the fretboard while the other fingers hover 10 mm above
+the strings; where that fingering does not hold the note in a short simulated trial, the cheapest other one that does
+(a finger across two neighbouring strings, the index barred across all six in a hand pose of its own). Joint targets
+come from least squares on the env model's kinematics, joined by minimum-jerk moves timed per finger so that each
+note is held for the 2/3 the score asks (`world.scoring`). The rules in prose: docs/planner.md.
 """
 from __future__ import annotations
 
-import copy
-import dataclasses
 import functools
-import hashlib
-import inspect
 import itertools
-import sys
-from pathlib import Path
 
 import jax
 import jax.numpy as jnp
-import mujoco
 import numpy as np
-from mujoco import rollout
 from scipy.optimize import least_squares
 
-from dexguitar.envs import scoring
-from dexguitar.motion.kinematics import HandKinematics
-from dexguitar.world import detect
+from dexguitar.planner.right import LeftTiming
+from dexguitar.planner.tracking import Notes, Tracker, body_jac, clearance, converge, min_jerk
+from dexguitar.world import detect, scoring
 from dexguitar.world import hands as H
-from dexguitar.world import scene as S
 from dexguitar.world.geometry import point_segment_distance
 from dexguitar.world.guitar import GUITAR, N_STRINGS
+from dexguitar.world.kinematics import HandKinematics
 
-DT = 1.0 / S.CONTROL_HZ
-
-
-# ------------------------------------------------------------------------------------------------- notes
-
-@dataclasses.dataclass(frozen=True)
-class Notes:
-    """A song window as numpy: left goal (n, 6), pick targets (n, 6), onsets (n + 1,) in control steps."""
-
-    left: np.ndarray
-    pick: np.ndarray
-    onset: np.ndarray
-
-    @property
-    def n(self) -> int:
-        return len(self.left)
-
-    @property
-    def frames(self) -> int:
-        return int(self.onset[-1])
-
-    @classmethod
-    def from_window(cls, window) -> "Notes":
-        n = int(np.asarray(window.n))
-        dur = np.asarray(window.dur)[:n].astype(int)
-        return cls(np.asarray(window.left)[:n].astype(int), np.asarray(window.pick)[:n].astype(bool),
-                   np.concatenate([[0], np.cumsum(dur)]))
-
-
-def min_jerk(s):
-    s = np.clip(s, 0.0, 1.0)
-    return s ** 3 * (10 - 15 * s + 6 * s ** 2)
-
-
-# ------------------------------------------------------------------------------------------------- tracking
-
-class Tracker:
-    """PD targets that make MuJoCo follow a desired joint trajectory.
-
-    Each control step holds one PD target for `SUBSTEPS` physics steps. The step's effect on (qpos, qvel) is close to
-    affine in the target, so one batched rollout (nominal + one perturbation per actuator) gives the local inverse
-    model; the target minimises |q - q_des| + w_v |v - v_des| at the end of the step (slides weighted x10: 1 cm ~
-    0.1 rad), regularised toward the desired pose. The perturbed rollouts run without contacts: across a contact
-    onset finite differences are meaningless and once made the tracker kick the wrist by 0.4 m; the contact-free
-    model is a smooth approximate Jacobian, and the nominal rollout (with contacts) keeps the prediction exact.
-    Closing the loop in simulation makes the plan exact for MuJoCo C; MJX replays it open-loop and the PD absorbs the
-    small differences.
-    """
-
-    def __init__(self, scene: str, w_v: float = 0.03, reg: float = 1e-4, eps: float = 1e-3):
-        self.model = S.build_model(scene)
-        self.data = mujoco.MjData(self.model)
-        self.threads = [mujoco.MjData(self.model)]
-        m = self.model
-        self.free = _without_contacts(m)
-        lo, hi = m.actuator_ctrlrange.T
-        self.home = m.key_qpos[0].copy()
-        half = (hi - lo) / 2
-        self.half = half
-        # `GuitarEnv.action_to_ctrl`: ctrl = clip(home + clip(a, -1, 1) * half, lo, hi)
-        self.u_lo, self.u_hi = np.maximum(lo, self.home - half), np.minimum(hi, self.home + half)
-        self.scale = np.ones(m.nv)
-        for j in range(m.njnt):
-            if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE:
-                self.scale[m.jnt_dofadr[j]] = 10.0
-        self.w_v, self.reg, self.eps = w_v, reg, eps
-        assert m.nq == m.nv == m.nu, "hinges and slides only, one actuator per joint"
-        assert all(m.actuator_trnid[i, 0] == i for i in range(m.nu)), "actuator i drives joint i"
-
-    def track(self, q_des: np.ndarray, start: bool = False):
-        """q_des (T + 1, nq) with q_des[0] the start pose: the home keyframe, or q_des[0] at rest with `start`.
-        Returns ctrl (T, nu), q (T + 1, nq)."""
-        m, d = self.model, self.data
-        mujoco.mj_resetDataKeyframe(m, d, 0)
-        if start:
-            d.qpos[:] = q_des[0]
-        mujoco.mj_forward(m, d)
-        T, nu, nq = len(q_des) - 1, m.nu, m.nq
-        v_des = np.gradient(q_des, DT, axis=0)
-        spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-        state = np.empty(mujoco.mj_stateSize(m, spec))
-        pert = np.vstack([np.zeros((2, nu)), self.eps * np.eye(nu)])
-        models = [m] + [self.free] * (nu + 1)
-        w = np.concatenate([self.scale, self.w_v * self.scale])
-        ctrl = np.empty((T, nu))
-        qs = np.empty((T + 1, nq))
-        qs[0] = d.qpos
-        for t in range(T):
-            mujoco.mj_getState(m, d, state, spec)
-            u0 = np.clip(q_des[t + 1], self.u_lo, self.u_hi)
-            sign = np.where(u0 + self.eps > self.u_hi, -1.0, 1.0)       # stay inside ctrlrange (MuJoCo clamps)
-            controls = np.repeat((u0 + pert * sign)[:, None, :], S.SUBSTEPS, axis=1)
-            out, _ = rollout.rollout(models, self.threads, state[None], controls,
-                                     initial_warmstart=d.qacc_warmstart[None].copy())
-            x = out[:, -1, 1:1 + nq + m.nv]                    # FULLPHYSICS: time, qpos, qvel, ...
-            B = (x[2:] - x[1]).T / (self.eps * sign)           # (2 nv, nu), contact-free
-            err = np.concatenate([q_des[t + 1], v_des[t + 1]]) - x[0]
-            Bw, ew = B * w[:, None], err * w
-            du = np.linalg.solve(Bw.T @ Bw + self.reg * np.eye(nu), Bw.T @ ew)
-            u = np.clip(u0 + du, self.u_lo, self.u_hi)
-            d.ctrl[:] = u
-            for _ in range(S.SUBSTEPS):
-                mujoco.mj_step(m, d)
-            ctrl[t] = u
-            qs[t + 1] = d.qpos
-        return ctrl, qs
-
-    def to_action(self, ctrl):
-        """The env action whose PD targets are `ctrl` (inverse of `GuitarEnv.action_to_ctrl` inside its reach)."""
-        return (ctrl - self.home) / self.half
-
-
-def _without_contacts(model: mujoco.MjModel) -> mujoco.MjModel:
-    free = copy.copy(model)
-    free.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
-    return free
-
-
-# ------------------------------------------------------------------------------------------------- clearance
-
-def _clearance(a0, a1, b0, b1, n=9):
-    """Approximate closest distance between segments a0->a1 and b0->b1: the nearest of n points along the first.
-    Enough for a soft clearance term, and what the shipped clips were planned with (the exact
-    `geometry.segment_distance` would re-plan them)."""
-    t = np.linspace(0, 1, n)[:, None]
-    d2, _ = point_segment_distance(a0[None] + t * (a1 - a0)[None], b0[None], b1[None])
-    return np.sqrt(d2.min())
-
-
-# ------------------------------------------------------------------------------------------------- least squares
-
-def _fit(residual, x0, lo, hi, jac=None, iters: int = 1000, tol: float = 1e-10, h: float = 1e-6) -> np.ndarray:
-    """argmin |residual(x)|^2 over lo <= x <= hi, run until no step lowers it: Levenberg-Marquardt, a variable
-    that a step would take out of its bounds held at the bound. jac(x): the Jacobian (default: central differences).
-
-    The hand's IK problems are ill-conditioned (posture terms of weight 0.01-0.02 beside targets of weight 10-30). A
-    solver stopped by a relative cost tolerance (`scipy.optimize.least_squares`'s ftol) halts somewhere along the
-    flat valley, and where is decided by rounding: the BLAS kernels of two CPUs put a hand position 0.03 rad apart
-    and the barre hand 0.2 rad, and a barre trial holds on one and not on the other. Run to convergence, a solve
-    gives the valley's minimum, the same to ~1e-8 whatever the rounding (`tests/test_plan_robustness.py`)."""
-    if jac is None:
-        eye = h * np.eye(len(x0))
-        jac = lambda x: np.stack([residual(x + e) - residual(x - e) for e in eye], axis=1) / (2 * h)  # noqa: E731
-    x = np.clip(np.asarray(x0, float), lo, hi)
-    r = residual(x)
-    cost, mu = r @ r, 1e-3
-    for _ in range(iters):
-        J = jac(x)
-        g, A = J.T @ r, J.T @ J
-        scale = np.diag(A) + 1e-12
-        held = ((x <= lo) & (g > 0)) | ((x >= hi) & (g < 0))        # pressed against a bound
-        step = None
-        while step is None and mu < 1e12:
-            dx, fixed = np.zeros_like(x), held.copy()
-            for _ in range(len(x)):                                  # hold those a step would take beyond a bound
-                free = ~fixed
-                rhs = g[free] + A[np.ix_(free, fixed)] @ dx[fixed]
-                dx[free] = np.linalg.solve(A[np.ix_(free, free)] + mu * np.diag(scale[free]), -rhs)
-                over = free & ((x + dx < lo) | (x + dx > hi))
-                if not over.any():
-                    break
-                dx[over] = np.clip(x + dx, lo, hi)[over] - x[over]
-                fixed |= over
-            xn = np.clip(x + dx, lo, hi)
-            rn = residual(xn)
-            if rn @ rn < cost:
-                step = np.abs(xn - x).max()
-                x, r, cost, mu = xn, rn, rn @ rn, max(mu / 3, 1e-9)
-            else:
-                mu *= 4
-        if step is None or step < tol:
-            break
-    return x
-
-
-def _body_jac(k: HandKinematics, bid: int) -> np.ndarray:
-    """(3, 27) Jacobian of a body origin's guitar-frame position w.r.t. the hand's joints (after `k.set`), as
-    `HandKinematics.site_jac` is for a site."""
-    mujoco.mj_comPos(k.model, k.data)
-    jp = np.zeros((3, k.model.nv))
-    mujoco.mj_jacBody(k.model, k.data, jp, None, bid)
-    return k.g_rot.T @ jp[:, k.qadr]
-
-
-# ------------------------------------------------------------------------------------------------- right hand
-
-# The right planner's version number, written into exported residual policies (`policy.json`'s "right_feedforward")
-# so that older releases, which kept several planners, play them on this one; the only one `learn.policy` reads.
-RIGHT_PLANNER_VERSION = 4
-
-
-@dataclasses.dataclass
-class LeftTiming:
-    """What the right hand's planner knows of the tracked left plan in the duet: per note the first control step that
-    ends with the note held (`ready`), and the frets the env detects after every step (`press`, (T, 6))."""
-
-    ready: np.ndarray
-    press: np.ndarray
-
-    def lasts(self, goal, s: int, step: int, frames: int) -> bool:
-        """Does string s stay as `goal` asks (the note's left goal) for `frames` steps from `step` on? A pick's hold
-        (the duet's rule (3), `scoring`) may run on into the next notes while the string stays so."""
-        run = self.press[step:step + frames]
-        return len(run) == frames and bool(np.all(np.asarray(scoring.left_ok(run, np.asarray(goal)))[:, s]))
-
-
-@dataclasses.dataclass
-class Sweep:
-    """One note's stroke: the pick moves from `start` to `end` (string coordinates: string i, 0-based,
-    at i; the gaps at i +- 0.5) in `frames` control steps, crossing its first string at step `cross` (a fraction
-    `tau` of the way)."""
-
-    note: int
-    start: float
-    end: float
-    cross: float
-    tau: float
-    frames: float
-    strings: int
-    note_end: int
-
-    @property
-    def t0(self) -> float:
-        return self.cross - self.tau * self.frames
-
-    @property
-    def t1(self) -> float:
-        return self.t0 + self.frames
-
-
-class ScriptedRight:
-    """The picking hand: the pick point follows strokes across the target strings (`sweeps`), found by damped least
-    squares on the wrist (slides penalised: they are slow) with the fingers kept in the home grip. In the duet a
-    stroke waits for the simulated left hand and is fitted to its presses (`fit`). `early_gap`: in
-    `flight_of_the_bumblebee1`'s 5-frame lines a crossing moved into step 0 after a 5-frame note would leave that note
-    a stroke too short (2.7 frames, 4 steps between crossings) for the simulated pick to cross its string: 4 such
-    notes missed."""
-
-    depth = 0.003          # stroke bottom below string height (training needs >= 1 mm, evaluation > 0)
-    lift = 0.004           # above string height while passing over a string that is not picked
-    sweep_cross = 1        # a note's (first) string is crossed during this step of the note at the earliest ...
-    ready_lag = 0          # ... and in the duet this many steps after the first step that ends with the note held
-    sweep_frames = 8.0     # the longest stroke over one string, gap to gap; +`sweep_extra` per extra string: a strum
-    sweep_extra = -0.5     # is quicker, so that its last string is picked early enough to be held 2/3 of the note
-    half_min = 1.0         # a stroke takes at least this long on either side of its crossing
-    travel_min = 1.5       # a travel between strokes takes at least this long ...
-    travel_rate = 1.2      # ... and this many steps per string spacing (the simulated pick follows ~1 per step)
-    spare = 1.0            # what a travel leaves free around it before its crossing is moved later
-    max_delay = 2.0        # the most a crossing moves later in its note
-    lift_cost = 1.0        # `directions`: a string passed over costs as much as moving one spacing more
-    # the duet (`fit`)
-    strum_rate = 0.9       # a stroke quickened for the holds takes at least this many steps per string
-    pick_lag = 0.4         # the simulated pick crosses a string up to this many steps after the plan does
-    early_cross = 0.5      # where that holds more strings, a note's first string is crossed this late in its step 0
-    early_gap = 4.5        # ... only where the stroke before crossed its first string at least this many steps before
-
-    def __init__(self):
-        self.guitar = GUITAR
-        self.kin = HandKinematics("right")
-        self.kin.set(self.kin.home)
-        self.pick0 = self.kin.site(self.kin.hand.pick)
-        self.y = self.pick0[1]
-        sign = self.guitar.sign
-        self.xs = np.array([self.guitar.string_x(i + 1, self.y) for i in range(N_STRINGS)])
-        gap = np.abs(np.diff(self.xs)).mean()
-        # gaps: g[0] beyond string 1, g[i] between strings i and i+1 (0-based i-1, i), g[6] beyond string 6
-        self.gaps = np.concatenate([[self.xs[0] + sign * gap / 2], (self.xs[:-1] + self.xs[1:]) / 2,
-                                    [self.xs[-1] - sign * gap / 2]])
-        self.active = np.arange(6)                       # wrist slides and hinges move, fingers hold the pick
-        self.weights = np.array([0.03, 0.03, 0.03, 0.001, 0.001, 0.001])   # per m, per rad
-        # string coordinates: sigma -0.5, 0, 0.5, ..., 5.5 at the gaps and strings
-        self._sig = np.arange(-0.5, N_STRINGS, 0.5)
-        self._x = np.array([self.gaps[int(s + 0.5)] if s % 1 else self.xs[int(s)] for s in self._sig])
-
-    # --- the pick path: sweeps
-    def x_of(self, sigma):
-        """Guitar-frame x of string coordinates (linear beyond the outer gaps)."""
-        s = np.asarray(sigma, float)
-        lo = self._x[0] + (s - self._sig[0]) * (self._x[1] - self._x[0]) / 0.5
-        hi = self._x[-1] + (s - self._sig[-1]) * (self._x[-1] - self._x[-2]) / 0.5
-        return np.where(s < self._sig[0], lo, np.where(s > self._sig[-1], hi, np.interp(s, self._sig, self._x)))
-
-    def sigma_of(self, x: float) -> float:
-        """The string coordinate of a guitar-frame x (inverse of `x_of`)."""
-        order = np.argsort(self._x)
-        xp, sp = self._x[order], self._sig[order]
-        slope = (sp[-1] - sp[0]) / (xp[-1] - xp[0])
-        if x < xp[0]:
-            return float(sp[0] + (x - xp[0]) * slope)
-        if x > xp[-1]:
-            return float(sp[-1] + (x - xp[-1]) * slope)
-        return float(np.interp(x, xp, sp))
-
-    @staticmethod
-    def stroke_ends(a: int, b: int, down: bool) -> tuple[float, float]:
-        """(start, end) of a stroke over strings a..b (0-based, a nearer string 1): down goes toward string 1."""
-        return (b + 0.5, a - 0.5) if down else (a - 0.5, b + 0.5)
-
-    def _travel_frames(self, s0: float, s1: float) -> float:
-        dist = abs(s1 - s0)
-        return 0.0 if dist < 1e-6 else max(self.travel_min, self.travel_rate * dist)
-
-    def directions(self, notes_ab, crosses, sigma0: float) -> list[bool]:
-        """Per stroke, down (True) or up: the least total of travel plus `lift_cost` per string passed over, each
-        travel per frame of the time it has (dynamic programming over the two directions of every stroke)."""
-        def cost(s0, s1, dt):
-            passed = sum(1 for k in range(N_STRINGS) if min(s0, s1) < k < max(s0, s1))
-            return (abs(s1 - s0) + self.lift_cost * passed) / max(dt, 1.0)
-        n = len(notes_ab)
-        if n == 0:
-            return []
-        dirs = (True, False)
-        total = np.array([cost(sigma0, self.stroke_ends(*notes_ab[0], d)[0], crosses[0]) for d in dirs])
-        back = np.zeros((n, 2), int)
-        for k in range(1, n):
-            dt = crosses[k] - crosses[k - 1]
-            new = np.empty(2)
-            for j, d in enumerate(dirs):
-                start = self.stroke_ends(*notes_ab[k], d)[0]
-                c = [total[i] + cost(self.stroke_ends(*notes_ab[k - 1], dd)[1], start, dt) for i, dd in enumerate(dirs)]
-                back[k, j] = int(np.argmin(c))
-                new[j] = min(c)
-            total = new
-        j = int(np.argmin(total))
-        out = [True] * n
-        for k in range(n - 1, -1, -1):
-            out[k] = dirs[j]
-            j = back[k, j]
-        return out
-
-    def sweeps(self, notes: Notes, earliest=None) -> tuple[list[Sweep], float]:
-        """The strokes and the string coordinate of the home pick. earliest: None (alone), each note's first step at
-        which its strings may be crossed, or a `LeftTiming` (the duet)."""
-        timing = earliest if isinstance(earliest, LeftTiming) else None
-        earliest = timing.ready if timing is not None else earliest
-        sigma0 = self.sigma_of(self.pick0[0])
-        rows = []
-        for i in range(notes.n):
-            tg = np.flatnonzero(notes.pick[i])
-            if len(tg) == 0:
-                continue
-            step = notes.onset[i] + self.sweep_cross
-            if earliest is not None:
-                step = max(step, int(earliest[i]) + self.ready_lag)
-            rows.append((i, int(tg.min()), int(tg.max()), step + 0.5))
-        down = self.directions([(a, b) for _, a, b, _ in rows], [c for *_, c in rows], sigma0)
-        out = []
-        for (i, a, b, c), d in zip(rows, down):
-            start, end = self.stroke_ends(a, b, d)
-            n = b - a + 1
-            frames = self.sweep_frames + self.sweep_extra * (n - 1)
-            out.append(Sweep(i, start, end, c, _min_jerk_inverse(0.5 / n), frames, n, int(notes.onset[i + 1])))
-        travels = [self._travel_frames(a.end, s.start) for a, s in zip(out[:-1], out[1:])]
-        for a, s, travel in zip(out[:-1], out[1:], travels):   # a crossing after a travel short of time comes later
-            late = travel + 2 * self.half_min * ((1 - a.tau) + s.tau) + self.spare - (s.cross - a.cross)
-            if late > 0 and travel > 0:
-                room = s.note_end - 1.5 - s.cross - (s.strings - 1)
-                s.cross += float(np.clip(late, 0.0, max(0.0, min(room, self.max_delay))))
-        if timing is not None:
-            for prev, s in zip([None] + out[:-1], out):
-                self.fit(notes, timing, s, prev)
-        for a, s, travel in zip(out[:-1], out[1:], travels):   # strokes shortened to share the time between crossings
-            room = s.cross - a.cross - travel
-            if room < 2 * self.half_min:
-                room = min(s.cross - a.cross, 2 * self.half_min)
-            wa, wb = (1 - a.tau) * a.frames, s.tau * s.frames          # in proportion to what each side would take
-            a.frames = min(a.frames, room * wa / (wa + wb) / (1 - a.tau))
-            s.frames = min(s.frames, room * wb / (wa + wb) / s.tau)
-        return out, sigma0
-
-    def crossings(self, notes: Notes, i: int, a: int, b: int, cross: float, down: bool,
-                  frames: float | None = None) -> dict:
-        """{string: planned time} at which a stroke over strings a..b of `frames` (default: its full length),
-        crossing its first string at `cross`, crosses each of note i's picked strings."""
-        n = b - a + 1
-        frames = self.sweep_frames + self.sweep_extra * (n - 1) if frames is None else frames
-        t0 = cross - _min_jerk_inverse(0.5 / n) * frames
-        return {int(s): t0 + _min_jerk_inverse(((b - s if down else s - a) + 0.5) / n) * frames
-                for s in np.flatnonzero(notes.pick[i])}
-
-    def short_holds(self, notes: Notes, timing: LeftTiming, i: int, a: int, b: int, cross: float, down: bool,
-                    frames: float | None = None) -> int:
-        """How many of note i's picked strings (a..b) a stroke (`crossings`) would pick too late for the left hand's
-        press to last 2/3 of the note from the pick (the simulated pick `pick_lag` behind the plan)."""
-        return self._late(notes, timing, i, self.crossings(notes, i, a, b, cross, down, frames))
-
-    def _late(self, notes: Notes, timing: LeftTiming, i: int, times: dict) -> int:
-        """`short_holds` of note i's crossing `times` ({string: planned time})."""
-        need = scoring.hold_frames(int(notes.onset[i + 1] - notes.onset[i]))
-        return sum(not timing.lasts(notes.left[i], s, int(np.floor(t + self.pick_lag)), need) for s, t in times.items())
-
-    def fit(self, notes: Notes, timing: LeftTiming, sw: Sweep, prev: Sweep | None = None) -> None:
-        """A stroke whose later strings would be picked too late for the left hand's press (`short_holds`): quicker,
-        down to `strum_rate` steps per string, and its first crossing in the note's step 0 (at `early_cross` of the
-        step, so that a tracking lag keeps it in the note) where each string crossed in that step is held as the note
-        asks a step before already (the simulated left hand may lag its plan); the least change that holds the most
-        strings."""
-        i = sw.note
-        tg = np.flatnonzero(notes.pick[i])
-        a, b, down = int(tg.min()), int(tg.max()), sw.start > sw.end
-        best = (self.short_holds(notes, timing, i, a, b, sw.cross, down, sw.frames), sw.cross, sw.frames)
-        if best[0] == 0:
-            return
-        onset = int(notes.onset[i])
-        floor = max(2 * self.half_min, self.strum_rate * sw.strings)
-        for cross in (sw.cross, onset + self.early_cross):
-            if cross < sw.cross and (onset + 0.5 >= sw.cross or onset < 1):
-                continue
-            if cross < sw.cross and prev is not None and cross - prev.cross < self.early_gap:
-                continue
-            f = sw.frames
-            while f >= floor - 1e-9 and best[0] > 0:
-                times = self.crossings(notes, i, a, b, cross, down, f)
-                safe = all(timing.lasts(notes.left[i], s, onset - 1, 2) for s, t in times.items() if t < onset + 1)
-                k = self._late(notes, timing, i, times)
-                if k < best[0] and (cross == sw.cross or safe):
-                    best = (k, cross, f)
-                f -= 0.5
-        sw.cross, sw.frames = best[1], best[2]
-
-    def pick_path(self, notes: Notes, earliest=None) -> np.ndarray:
-        """(T + 1, 3) pick point at every control step boundary (guitar frame): minimum-jerk in x from stop to stop
-        (each stroke's start and end, `sweeps`), below the strings from the first stroke on, lifted at the step
-        boundaries around each string passed over. earliest: as for `sweeps`."""
-        sw, sigma0 = self.sweeps(notes, earliest)
-        T = notes.frames
-        t = np.arange(T + 1, dtype=float)
-        zs = self.guitar.string_z
-        out = np.zeros((T + 1, 3))
-        out[:, 1] = self.y
-        if not sw:
-            out[:, 0], out[:, 2] = self.pick0[0], self.pick0[2]
-            return out
-        first = sw[0].t0
-        approach = (max(0.0, first - 10.0), sigma0)              # from the home pick to the first stroke
-        stops = [approach] + [p for s in sw for p in ((s.t0, s.start), (s.t1, s.end))]
-        sigma = np.full(T + 1, stops[-1][1])
-        sigma[t <= approach[0]] = sigma0
-        for (ta, sa), (tb, sb) in zip(stops[:-1], stops[1:]):
-            m = (t >= ta) & (t <= tb)
-            if tb > ta:
-                sigma[m] = sa + min_jerk((t[m] - ta) / (tb - ta)) * (sb - sa)
-        high = np.zeros(T + 1, bool)
-        legs = [(approach[0], first, sigma0, sw[0].start)] + [(a.t1, s.t0, a.end, s.start) for a, s in zip(sw, sw[1:])]
-        for ta, tb, sa, sb in legs:
-            for k in range(N_STRINGS):
-                if min(sa, sb) < k < max(sa, sb):
-                    tp = ta + _min_jerk_inverse(abs(k - sa) / abs(sb - sa)) * (tb - ta)
-                    high[max(int(np.floor(tp)), 0):min(int(np.ceil(tp)), T) + 1] = True
-        high |= t > sw[-1].t1 + 1
-        z = np.where(high, zs + self.lift, zs - self.depth)
-        before = t < first
-        descent = self.pick0[2] + (zs - self.depth - self.pick0[2]) * min_jerk(t[before] / first)
-        z[before] = np.maximum(z[before], descent)
-        out[:, 0], out[:, 2] = self.x_of(sigma), z
-        return out
-
-    # --- inverse kinematics
-    def solve(self, path: np.ndarray) -> np.ndarray:
-        """(T + 1, 27) joint targets putting the pick on `path`, damped least squares warm-started frame to frame."""
-        k = self.kin
-        q = k.home.copy()
-        out = np.empty((len(path), 27))
-        act, W = self.active, np.diag(self.weights)
-        for t, p in enumerate(path):
-            for _ in range(4):
-                k.set(q)
-                e = p - k.site(k.hand.pick)
-                J = k.site_jac(k.hand.pick)[:, act]
-                r = -(W @ W) @ (q[act] - k.home[act])
-                dq = np.linalg.solve(J.T @ J + W @ W, J.T @ e + r)
-                q[act] = np.clip(q[act] + dq, k.lo[act], k.hi[act])
-                if np.linalg.norm(e) < 2e-5:
-                    break
-            out[t] = q
-        return out
-
-    def desired(self, notes: Notes, earliest=None) -> np.ndarray:
-        return self.solve(self.pick_path(notes, earliest))
-
-
-def _min_jerk_inverse(frac):
-    """Time fraction at which the minimum-jerk profile reaches `frac`."""
-    lo, hi = 0.0, 1.0
-    for _ in range(40):
-        mid = (lo + hi) / 2
-        lo, hi = (mid, hi) if min_jerk(mid) < frac else (lo, mid)
-    return (lo + hi) / 2
-
-
-# ------------------------------------------------------------------------------------------------- left hand
 
 WRIST_THUMB = np.arange(11)                                    # wrist slides + hinges, thumb (DoF order)
 FINGER_DOFS = [np.arange(11 + 4 * f, 15 + 4 * f) for f in range(4)]
@@ -682,7 +159,7 @@ class ScriptedLeft:
                 J[3 * f:3 * f + 3, :27] = 10 * k.site_jac(site)
             for f in range(4):
                 if 0.04 - g.sign * k.body(hand.segments[f][0])[0] > 0:
-                    J[15 + f, :27] = -10 * g.sign * _body_jac(k, hand.segments[f][0])[0]
+                    J[15 + f, :27] = -10 * g.sign * body_jac(k, hand.segments[f][0])[0]
             J[19:40, 6:27] = 0.02 * np.eye(21)
             J[40:43, 3:6] = 0.02 * np.eye(3)
             for j in range(2):
@@ -700,7 +177,7 @@ class ScriptedLeft:
         z0 = np.concatenate([q0, q0[11:], q0[11:]])
         lo = np.concatenate([k.lo, k.lo[11:], k.lo[11:]])
         hi = np.concatenate([k.hi, k.hi[11:], k.hi[11:]])
-        self._positions[p] = _fit(residual, z0, lo, hi, jacobian)[:27]
+        self._positions[p] = converge(residual, z0, lo, hi, jacobian)[:27]
         return self._positions[p]
 
     def barre_position(self, fret: int) -> np.ndarray:
@@ -727,7 +204,7 @@ class ScriptedLeft:
             out.append(0.01 * (q[6:] - self.posture))
             return np.concatenate(out)
 
-        return _fit(residual, self.position(fret), k.lo, k.hi)
+        return converge(residual, self.position(fret), k.lo, k.hi)
 
     def finger(self, f: int, p: int, target: tuple, pressing: bool, string: int = -1) -> np.ndarray:
         """4 joint values of finger f (0 = index) in position p putting its tip on `target` (rounded to 0.1 mm).
@@ -749,7 +226,7 @@ class ScriptedLeft:
             out = [100 * (k.site(tip) - np.asarray(target))]
             if pressing:
                 seg = k.segments()[3 * f: 3 * f + 3]
-                gaps = [_clearance(a, b, strings[i, 0], strings[i, 1]) for a, b in seg for i in others]
+                gaps = [clearance(a, b, strings[i, 0], strings[i, 1]) for a, b in seg for i in others]
                 out.append(10 * np.maximum(0.0, self.clearance - np.array(gaps)))
             out.append(0.01 * (x - self.posture[5 + 4 * f: 9 + 4 * f]))
             return np.concatenate(out)
@@ -757,7 +234,7 @@ class ScriptedLeft:
         x0 = base[dofs]
         lo, hi = k.lo[dofs], k.hi[dofs]
         x = least_squares(residual, np.clip(x0, lo + 1e-6, hi - 1e-6), bounds=(lo, hi)).x
-        x = _fit(residual, x, lo, hi)           # to the minimum of the basin that solve found (a stretch has several)
+        x = converge(residual, x, lo, hi)        # to the minimum of the basin that solve found (a stretch has several)
         self._fingers[key] = x
         return x
 
@@ -1319,27 +796,6 @@ class ScriptedLeft:
             ok = np.asarray(scoring.left_ok(jnp.asarray(press[a:b]), jnp.asarray(notes.left[i]))).all(axis=1)
             out[i] = a + int(np.argmax(ok)) if ok.any() else a
         return LeftTiming(out, press)
-
-
-def constants(hand: str) -> str:
-    """What plans of `hand` ("left" or "right") are made with, as text: the source of the modules that make them
-    (this one, the kinematics, the scoring rules and the world they plan in), its planner's class constants, the
-    module's, the scene's control timing and the tracker's defaults. The plan cache's keys hash it
-    (`motion.feedforward`), so that a plan made by other code or with other constants is not reused."""
-    cls = ScriptedLeft if hand == "left" else ScriptedRight
-    own = {k: v for k, v in sorted(vars(cls).items()) if not k.startswith("_") and isinstance(v, (int, float))}
-    tracker = {k: p.default for k, p in inspect.signature(Tracker.__init__).parameters.items()
-               if p.default is not p.empty}
-    common = {"control_hz": S.CONTROL_HZ, "substeps": S.SUBSTEPS, "home_position": HOME_POSITION,
-              "posture": POSTURE.tolist(), "pair": PAIR, "barre": BARRE, "barre_positions": BARRE_POSITIONS}
-    return repr((_source_digest(), mujoco.__version__, cls.__name__, own, tracker, common))
-
-
-@functools.cache
-def _source_digest() -> str:
-    modules = (sys.modules[__name__], scoring, detect, H, S, GUITAR.__class__, HandKinematics, point_segment_distance)
-    files = sorted({inspect.getsourcefile(m) for m in modules})
-    return hashlib.sha256(b"".join(Path(f).read_bytes() for f in files)).hexdigest()
 
 
 @functools.cache

@@ -1,26 +1,23 @@
-"""The planner's motion of a whole song, as a feedforward that a residual policy corrects (left hand; right hand too).
+"""Plans: the planners' motion of whole songs, as feedforwards that a residual policy corrects, cached on disk.
 
-Why: the IK planner (`motion.planner`, no learning) plays the authors' songs at a mean left F1 of 0.993
-(`docs/results.md`), while PPO from the home pose needs minutes per song and 2e8 samples for a general hand that
-still plays them at 0.19. With `EnvConfig(feedforward=True)` the env adds the planner's action of the current
-song frame to the left hand's action, so a policy whose output starts at zero starts as the planner, and PPO only
-learns the corrections (residual RL). Training windows start in the planned state of their first frame (reference
-state initialization) and end with their last note, so the feedforward always belongs to the notes being played.
+With `EnvConfig(feedforward=True)` the env adds the left planner's action of the current song frame to the left
+hand's action, so a policy whose output starts at zero starts as the planner and PPO only learns the corrections
+(residual RL); training windows start in the planned state of their first frame and end with their last note, so the
+feedforward always belongs to the notes being played. `EnvConfig(right_feedforward=True)` does the same for the right
+hand, whose plan, in the duet, waits note by note for the left hand's plan to hold the note (`left_plans`).
 
-A `Plan` lives in `Timeline.plan` (song-frame indexed: frame 0 is the grace rest before the first note, as in a
-sequential window), so it travels with the songs into every jitted program as an argument. Planning takes seconds per
-song on one CPU core; `attach` plans in parallel processes and keeps each plan in a disk cache keyed by the song's
-notes and timing and the planner's constants (`planner.constants`).
-
-The right hand works the same way (`EnvConfig(right_feedforward=True)`, `Timeline.plan_right`): its
-planner plays the 15 official songs at right F1 0.986-1.000 where `right_mixed`, trained on picking patterns, plays
-0.70-0.95. Alone its plan depends on the picked strings and onsets; in the duet it also waits, note by note, for the
-left hand's plan to hold the note (`left_plans`).
+A `Plan` lives in `Timeline.plan` / `Timeline.plan_right` (song-frame indexed: frame 0 is the grace rest before the
+first note, as in a sequential window), so it travels with the songs into every jitted program as an argument.
+`envs.make` attaches the plans its config asks for (`prepare`). Planning takes seconds per song on one CPU core;
+`attach` plans in parallel processes and keeps each plan in a disk cache keyed by the song's notes and timing and by
+the planners' code and constants (`constants`), so that a plan made by other code is made again.
 """
 from __future__ import annotations
 
 import concurrent.futures as futures
+import functools
 import hashlib
+import inspect
 import multiprocessing
 import os
 import sys
@@ -30,10 +27,15 @@ import warnings
 from pathlib import Path
 
 import jax
+import mujoco
 import numpy as np
 from flax import struct
 
-from dexguitar.motion.planner import Notes, ScriptedLeft, ScriptedRight, Tracker, constants
+from dexguitar.music import timeline as TL
+from dexguitar.planner import left as L
+from dexguitar.planner.left import ScriptedLeft
+from dexguitar.planner.right import ScriptedRight
+from dexguitar.planner.tracking import Notes, Tracker
 from dexguitar.world import hands as H
 from dexguitar.world import scene
 
@@ -57,7 +59,7 @@ def cache_dir() -> Path:
 def _job_key(left, onset, hand: str = "left", pick=None, after: bool = False) -> str:
     """A plan's cache key: the left hand's plan depends on the left goals and onsets, the right hand's on the picked
     strings and onsets, and where it waits for the left hand's plan (`after`), on that plan too; each on its planner's
-    constants (`planner.constants`), so that a plan made with other constants is made again."""
+    constants (`constants`), so that a plan made with other constants is made again."""
     tag = "left" if hand == "left" else "right-after-left" if after else "right"
     h = hashlib.sha256(tag.encode())
     h.update(constants(hand).encode())
@@ -69,6 +71,28 @@ def _job_key(left, onset, hand: str = "left", pick=None, after: bool = False) ->
         h.update(np.ascontiguousarray(left, np.int32).tobytes())
     h.update(np.ascontiguousarray(onset, np.int64).tobytes())
     return h.hexdigest()[:24]
+
+
+def constants(hand: str) -> str:
+    """What plans of `hand` ("left" or "right") are made with, as text: the source of the planner package and of the
+    world it plans in, its planner's class constants, the left planner's module constants, the scene's control timing
+    and the tracker's defaults, and the MuJoCo version. The plan cache's keys hash it (`_job_key`)."""
+    cls = ScriptedLeft if hand == "left" else ScriptedRight
+    own = {k: v for k, v in sorted(vars(cls).items()) if not k.startswith("_") and isinstance(v, (int, float))}
+    tracker = {k: p.default for k, p in inspect.signature(Tracker.__init__).parameters.items()
+               if p.default is not p.empty}
+    common = {"control_hz": scene.CONTROL_HZ, "substeps": scene.SUBSTEPS, "home_position": L.HOME_POSITION,
+              "posture": L.POSTURE.tolist(), "pair": L.PAIR, "barre": L.BARRE, "barre_positions": L.BARRE_POSITIONS}
+    return repr((_source_digest(), mujoco.__version__, cls.__name__, own, tracker, common))
+
+
+@functools.cache
+def _source_digest() -> str:
+    """sha256 of the planner package's sources and of the world modules it reads."""
+    here = Path(__file__).parent
+    world = ("scene", "hands", "guitar", "geometry", "kinematics", "detect", "scoring")
+    files = sorted(here.glob("*.py")) + [here.parent / "world" / f"{m}.py" for m in world]
+    return hashlib.sha256(b"".join(f.read_bytes() for f in files)).hexdigest()
 
 
 _PLANNERS: dict = {}
@@ -175,7 +199,7 @@ def in_processes(fn, jobs, workers: int = 0, keep: bool = False) -> tuple[list, 
     each, never in this process, even for one job: one process per core does the work, and 16 processes of 16 BLAS
     threads each ran at a load of 150 on a GPU host. `fn` must be a module-level function.
     keep: the processes stay for the next call with `keep` (`_KEPT`); only for work whose result does not depend on
-    what a worker did before (a plan does not: `planner.ScriptedLeft.position`)."""
+    what a worker did before (a plan does not: `ScriptedLeft.position`)."""
     workers = max(1, min(workers or os.cpu_count() or 1, len(jobs)))
     saved = _blas_one_thread()           # workers are spawned as jobs arrive, so for the whole call
     try:
@@ -255,9 +279,8 @@ def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, 
            after: list | None = None):
     """The song batch (`timeline.batch`/`stack`) with a `Plan` per song by `hand`'s planner (`plan_songs`), as `plan`
     (left) or `plan_right`; empty songs get a plan of the home pose."""
-    from dexguitar.music.timeline import capacity
     keys, found = plan_songs(songs, rest_frames, workers, log, hand, after)
-    F = capacity(max((len(found[k][0]) for k in found), default=1), MIN_FRAMES)
+    F = TL.capacity(max((len(found[k][0]) for k in found), default=1), MIN_FRAMES)
     flip = H.mirror_qpos(np.ones(H.N_DOF), hand) if mirror else np.ones(H.N_DOF, np.float32)
     act, qpos, qvel, frames = [], [], [], []
     for k in keys:
@@ -284,8 +307,7 @@ def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, 
 def prepare(songs, config):
     """Songs (a list of `Song`s or timelines, or a batch) as an env of `config` (an `EnvConfig` or None) reads them:
     stacked, with the plans attached where `config.feedforward` or `config.right_feedforward` asks for them."""
-    from dexguitar.envs import as_batch
-    songs = as_batch(songs)
+    songs = TL.as_batch(songs)
     if config is not None and config.feedforward and songs.plan is None:
         songs = attach(songs, config.rest_frames, config.mirror)
     if config is not None and config.right_feedforward and songs.plan_right is None:
