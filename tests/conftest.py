@@ -2,9 +2,8 @@
 run of the suite) is not compiled again by the next one; the suite is dominated by compiling the scanned envs.
 Rendering tests take the `offscreen_gl` fixture.
 
-The suite runs on 2 processes (`make test`: `-n 2 --dist loadfile`). Tests that compile the same program are put in
-one group (one process, in order), so that the first compiles it and the others load it from the cache instead of
-both compiling it at once; groups start longest first (`pytest_collection_modifyitems`)."""
+The suite runs on 2 processes (`make test`: `-n 2 --dist loadfile`), a file's tests in one process, the files in the
+order of `FIRST` (`pytest_collection_modifyitems`)."""
 import os
 from pathlib import Path
 
@@ -73,20 +72,19 @@ def export_compiles(compiles, monkeypatch):
 
 @pytest.fixture(scope="session")
 def compiled_chunk():
-    """compiled_chunk(trainer, state): one training iteration compiled as `train` compiles it (placed, ahead of
-    time), so that tests calling it directly share `train`'s program through the persistent cache; compiled once per
-    trainer in a process (a trace and a load from the cache take ~10 s).
+    """compiled_chunk(trainer, state): one training iteration got as `train` gets it (`learn.run.chunk_build`), so
+    that a later `train` of the same program takes it rather than trace and compile it again: in this process from
+    memory, in another (a test's subprocess, a notebook) from its file beside the compilation cache.
     -> (chunk, state, data, put): the state and data placed, and `put` to place another (restored) state alike."""
+    from dexguitar.learn import run as RUN
     from dexguitar.learn.devices import Placement
-    chunks = {}
 
     def build(trainer, state):
         where = Placement()
         shardings = where.shardings(state)
         state, data = where.put(state, shardings), where.put(trainer.data, where.replicated(trainer.data))
-        if id(trainer) not in chunks:           # the trainer is kept with its chunk, so its id stays its own
-            chunks[id(trainer)] = trainer, trainer.make_train_chunk(1, where).lower(state, data).compile()
-        return chunks[id(trainer)][1], state, data, lambda tree: where.put(tree, shardings)
+        chunk, _, _ = RUN.chunk_build(trainer, where, data, lambda msg: None).result()
+        return chunk, state, data, lambda tree: where.put(tree, shardings)
     return build
 
 
@@ -111,48 +109,24 @@ def offscreen_gl() -> str:
 
 
 # ------------------------------------------------------------------------------------------- scheduling (xdist)
-# Tests that share a compiled program: one process runs them in this order, the first one compiling it.
-GROUPS = {
-    "left_trainer": ("tests/test_faults.py", "tests/test_devices.py", "tests/test_learn.py",
-                     "tests/test_compile_once.py", "tests/test_notebooks.py::test_train_a_hand"),  # its chunk, eval
-    "sync": ("tests/test_sync.py", "tests/test_notebooks.py::test_synchronize"),   # the tiny synchronizer chunk
-}
-# Longest first (a group or a file; the rest follow in their usual order): measured with an empty cache, 2 processes.
-FIRST = ("left_trainer", "sync", "tests/test_envs.py", "tests/test_world.py",
-         "tests/test_scripted.py", "tests/test_notebooks.py", "tests/test_perform.py", "tests/test_retarget.py",
-         "tests/test_cursor.py", "tests/test_rewards_metrics.py", "tests/test_detect.py")
-
-
-def _group(nodeid: str) -> str:
-    for name, prefixes in GROUPS.items():
-        if nodeid.startswith(prefixes):
-            return name
-    return nodeid.split("::")[0]
+# A file's tests run in one process, in order. The training chunks they share are compiled once, by the first file of
+# this order that needs one (the left hand's by test_faults.py, the synchronizer's by test_sync.py), and kept in a file
+# beside the compilation cache that a later process loads in seconds (`compiled_chunk`, `learn.executable`), so the
+# files that need them start after those two. Longest first otherwise; measured with an empty cache, 2 processes.
+FIRST = ("tests/test_faults.py", "tests/test_sync.py", "tests/test_scripted.py", "tests/test_feedforward.py",
+         "tests/test_envs.py", "tests/test_devices.py", "tests/test_compile_once.py", "tests/test_notebooks.py",
+         "tests/test_learn.py", "tests/test_world.py", "tests/test_install.py", "tests/test_plan_robustness.py",
+         "tests/test_cursor.py", "tests/test_retarget.py", "tests/test_rewards_metrics.py", "tests/test_perform.py",
+         "tests/test_detect.py")
 
 
 def pytest_configure(config):
-    # keep the order below: xdist's default puts the scopes with the most tests first, whatever their length
+    # keep the order below: xdist's default puts the files with the most tests first, whatever their length
     if hasattr(config.option, "loadscopereorder"):
         config.option.loadscopereorder = False
 
 
-@pytest.hookimpl(optionalhook=True)
-def pytest_xdist_make_scheduler(config, log):
-    """`--dist loadfile` with the groups above: a file's tests, or a group's, run in one process, in order."""
-    if config.getvalue("dist") != "loadfile":
-        return None
-    from xdist.scheduler import LoadScopeScheduling
-
-    class GroupScheduling(LoadScopeScheduling):
-        def _split_scope(self, nodeid: str) -> str:
-            return _group(nodeid)
-    return GroupScheduling(config, log)
-
-
 def pytest_collection_modifyitems(config, items):
     rank = {name: i for i, name in enumerate(FIRST)}
-    # a stable sort: the tests of a group keep their order, the groups go longest first
-    order = {id(item): i for i, item in enumerate(items)}
-    items.sort(key=lambda item: (rank.get(_group(item.nodeid), len(FIRST)),
-                                 next((i for i, p in enumerate(GROUPS.get(_group(item.nodeid), ())) if
-                                       item.nodeid.startswith(p)), 0), order[id(item)]))
+    order = {id(item): i for i, item in enumerate(items)}      # a stable sort: a file's tests keep their order
+    items.sort(key=lambda item: (rank.get(item.nodeid.split("::")[0], len(FIRST)), order[id(item)]))

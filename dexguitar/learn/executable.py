@@ -10,7 +10,8 @@
 
 The file's key hashes everything the program is made of except the values of its arguments (songs, reference
 motion, frozen policies): the package's files, the versions, the devices, the trainer's config (but the seed and
-the run's length, which the chunk does not read) and policy specs, and the arguments' shapes. The chunk closes over
+the run's length, which the chunk does not read), its policy spec and those of the frozen policies it plays, and the
+arguments' shapes. The chunk closes over
 nothing else (`trainer.Data`).
 """
 from __future__ import annotations
@@ -32,6 +33,8 @@ from pathlib import Path
 
 import jax
 from jax.experimental import serialize_executable
+
+from dexguitar.learn.policy import PolicySpec
 
 # TrainConfig fields that the chunk does not read: the first state's key, the run's length. A second seed or a longer
 # run loads the chunk file of the first.
@@ -100,8 +103,7 @@ def key(trainer, where, n: int, args) -> str:
         "trainer": type(trainer).__qualname__,
         "train": {k: v for k, v in dataclasses.asdict(trainer.config).items() if k not in OUTSIDE_THE_CHUNK},
         "env": dataclasses.asdict(trainer.env.config), "spec": repr(trainer.spec), "iterations": n,
-        "sources": {k: {m: v for m, v in meta.items() if m != "path"}
-                    for k, meta in getattr(trainer, "sources", {}).items()},
+        "sources": {k: repr(PolicySpec.from_meta(meta)) for k, meta in getattr(trainer, "sources", {}).items()},
         "tree": re.sub(r" at 0x[0-9a-f]+", "", str(jax.tree.structure(args))),    # MJX's static arrays' wrappers
         "leaves": leaves,
     }
