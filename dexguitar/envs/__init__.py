@@ -8,11 +8,12 @@ from dexguitar.envs.left import LeftEnv
 from dexguitar.envs.right import RightEnv
 from dexguitar.envs.wrappers import AutoReset, ChainWindows, PlayThrough, Wrapper
 from dexguitar.music import timeline as TL
+from dexguitar.world.physics import PHYSICS
 
 ENVS = {"left": LeftEnv, "right": RightEnv, "duet": DuetEnv}
 
 
-def make(hand: str, songs, config: EnvConfig | None = None, backend: str = "jax", **overrides):
+def make(hand: str, songs, config: EnvConfig | None = None, **overrides):
     """The env for `hand` ("left", "right" or "duet") over a song batch (a `Timeline` or a list of them or of
     `Song`s), with its episode logic: training windows chained and auto-reset, or (`config.sequential`) whole songs
     played through."""
@@ -31,7 +32,7 @@ def make(hand: str, songs, config: EnvConfig | None = None, backend: str = "jax"
     if config.right_feedforward and songs.plan_right is None:
         raise ValueError("EnvConfig.right_feedforward needs the right planner's motion of the songs: "
                          "dexguitar.motion.feedforward.prepare(songs, config)")
-    env = ENVS[hand](songs, config, backend)
+    env = ENVS[hand](songs, config)
     return PlayThrough(env) if config.sequential else AutoReset(ChainWindows(env))
 
 
@@ -42,5 +43,5 @@ def as_batch(songs) -> TL.Timeline:
     return songs
 
 
-__all__ = ["as_batch", "EnvConfig", "GuitarEnv", "State", "Body", "Picking", "Task", "ObsLayout", "LeftEnv", "RightEnv",
+__all__ = ["PHYSICS", "as_batch", "EnvConfig", "GuitarEnv", "State", "Body", "Picking", "Task", "ObsLayout", "LeftEnv", "RightEnv",
            "DuetEnv", "ENVS", "make", "Wrapper", "ChainWindows", "AutoReset", "PlayThrough"]
