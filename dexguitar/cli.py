@@ -147,16 +147,19 @@ def _check(args) -> int:
 def _bench_env(args) -> int:
     rows = []
     for hand in args.hand:                         # refused before any env is made, not once memory runs out
-        check_envs(max(args.envs), 2 * env_bytes(E.make(hand, default_songs(hand))))
-    for hand in args.hand:
-        for n in args.envs:
-            for bare in ((False, True) if args.bare else (False,)):
-                r = bench_env(hand, n, args.steps, bare=bare)
-                rows.append(r)
-                label = hand + (" (physics only)" if bare else "")
-                print(f"{label:22s} envs {n:6d}  compile {r['compile_s']:6.1f} s  "
-                      f"{r['control_steps_per_s']:11,.0f} control steps/s  {r['physics_steps_per_s']:12,.0f} "
-                      f"physics steps/s  [{r['device']}]", flush=True)
+        check_envs(max(args.envs), 2 * env_bytes(E.make(hand, default_songs(hand), physics="jax")))
+    for physics in args.physics:
+        for hand in args.hand:
+            for n in args.envs:
+                for bare in ((False, True) if args.bare else (False,)):
+                    r = bench_env(hand, n, args.steps, bare=bare, physics=physics)
+                    rows.append(r)
+                    label = hand + (" (physics only)" if bare else "")
+                    contacts = f"  contacts {r['max_contacts'] / n:4.1f}/env" if r["max_contacts"] >= 0 else ""
+                    print(f"{r['physics']:4s} {label:22s} envs {n:6d}  compile {r['compile_s']:6.1f} s  first run "
+                          f"{r['first_run_s']:6.1f} s  {r['control_steps_per_s']:11,.0f} control steps/s  "
+                          f"{r['physics_steps_per_s']:12,.0f} physics steps/s  solver at {r['solver_iterations']} "
+                          f"iterations {100 * r['solver_at_limit']:5.1f} %{contacts}  [{r['device']}]", flush=True)
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=2))
     return 0
@@ -294,15 +297,16 @@ def _eval(args) -> int:
     if not songs:
         raise UserError("eval: give --song and/or --procedural N")
     keep = (lambda r: r) if args.notes else (lambda r: {k: v["summary"] for k, v in r.items()})
+    env_config = E.EnvConfig(physics=args.physics)
     if spec.kind == "synchronizer" and args.ckpt:   # before and after synchronization
-        staged = evaluate_synchronizer(params, spec, songs)
+        staged = evaluate_synchronizer(params, spec, songs, env_config)
         if args.json:
             print(dumps({stage: keep(r) for stage, r in staged.items()}, indent=2))
             return 0
         for stage, results in staged.items():
             _print_results(results, f"[{stage} synchronization] ")
         return 0
-    results = evaluate(params, spec, songs)
+    results = evaluate(params, spec, songs, env_config)
     if args.json:
         print(dumps(keep(results), indent=2))
         return 0
@@ -428,6 +432,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--envs", nargs="+", type=positive, default=[4])
     p.add_argument("--steps", type=positive, default=100, help="control steps per timed rollout")
     p.add_argument("--bare", action="store_true", help="also time the MJX physics alone")
+    p.add_argument("--physics", nargs="+", default=["auto"], choices=E.PHYSICS,
+                   help="MJX's implementations to time, one after the other (auto: Warp on a GPU where installed)")
     p.add_argument("--json", help="write the results to this file")
     p.set_defaults(func=_bench_env)
 
@@ -502,6 +508,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="procedural material, as for train (default: the hand's)")
     p.add_argument("--json", action="store_true")
     p.add_argument("--notes", action="store_true", help="with --json: include the per-note rows")
+    p.add_argument("--physics", default="auto", choices=E.PHYSICS,
+                   help="MJX's implementation (auto: Warp on a GPU where warp-lang is installed, else JAX)")
     p.set_defaults(func=_eval)
 
     add_motion_commands(sub)

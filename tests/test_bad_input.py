@@ -298,7 +298,8 @@ def test_undefined_scores_are_null_with_a_reason_in_json(monkeypatch, capsys):
     # `dexguitar eval --json` prints it so (the policy and the play itself stand in)
     monkeypatch.setattr(cli.PO, "load", lambda path: ({}, {"hand": "right"}))
     monkeypatch.setattr(cli.PO.PolicySpec, "from_meta", staticmethod(lambda meta: SimpleNamespace(kind="policy")))
-    monkeypatch.setattr(cli, "evaluate", lambda params, spec, songs: {"Ode": {"summary": summary, "notes": [row]}})
+    monkeypatch.setattr(cli, "evaluate", lambda params, spec, songs, env_config=None: {
+        "Ode": {"summary": summary, "notes": [row]}})
     assert main(["eval", "--ckpt", "C", "--song", "ode_to_joy", "--json"]) == 0
     assert strict_json(capsys.readouterr().out)["Ode"]["left"]["f1"] is None
     assert main(["eval", "--ckpt", "C", "--song", "ode_to_joy"]) == 0
@@ -424,7 +425,7 @@ def test_train_and_bench_refuse_env_counts_before_allocating(tmp_path, monkeypat
     # 2e14 B = 186,264.5 GiB, past any machine
     f32 = lambda *shape: jax.ShapeDtypeStruct(shape, np.float32)          # noqa: E731
     monkeypatch.setattr(cli, "default_songs", lambda hand: None)
-    monkeypatch.setattr(cli.E, "make", lambda hand, songs: SimpleNamespace(
+    monkeypatch.setattr(cli.E, "make", lambda hand, songs, **config: SimpleNamespace(
         reset=lambda key: jnp.zeros((250_000,), jnp.float32)))
     monkeypatch.setattr(cli, "bench_env", lambda *a, **k: pytest.fail("bench ran"))
     assert main(["bench", "env", "--envs", "4", "100000000"]) == 2

@@ -9,11 +9,12 @@ from dexguitar.envs.right import RightEnv
 from dexguitar.envs.wrappers import AutoReset, ChainWindows, PlayThrough, Wrapper
 from dexguitar import planner
 from dexguitar.music.timeline import as_batch
+from dexguitar.world.physics import PHYSICS
 
 ENVS = {"left": LeftEnv, "right": RightEnv, "duet": DuetEnv}
 
 
-def make(hand: str, songs, config: EnvConfig | None = None, backend: str = "jax", **overrides):
+def make(hand: str, songs, config: EnvConfig | None = None, **overrides):
     """The env for `hand` ("left", "right" or "duet") over a song batch (a `Timeline` or a list of them or of
     `Song`s), with its episode logic: training windows chained and auto-reset, or (`config.sequential`) whole songs
     played through. The planner's plans that the config's feedforwards ask for are made (or read from their
@@ -26,9 +27,10 @@ def make(hand: str, songs, config: EnvConfig | None = None, backend: str = "jax"
     if config.right_feedforward and "right" not in ENVS[hand].roles:
         raise ValueError(f"EnvConfig.right_feedforward is the right hand's planned motion; the {hand} env has no "
                          "right hand")
-    env = ENVS[hand](planner.prepare(songs, config), config, backend)
+    env = ENVS[hand](planner.prepare(songs, config), config)
     return PlayThrough(env) if config.sequential else AutoReset(ChainWindows(env))
 
 
-__all__ = ["as_batch", "EnvConfig", "GuitarEnv", "State", "Body", "Picking", "Task", "ObsLayout", "LeftEnv", "RightEnv",
-           "DuetEnv", "ENVS", "make", "Wrapper", "ChainWindows", "AutoReset", "PlayThrough"]
+__all__ = ["PHYSICS", "as_batch", "EnvConfig", "GuitarEnv", "State", "Body", "Picking", "Task", "ObsLayout", "LeftEnv",
+           "RightEnv", "DuetEnv", "ENVS", "make", "Wrapper", "ChainWindows", "AutoReset", "PlayThrough"]
+

@@ -1,5 +1,7 @@
 """Env throughput: control steps per second of the full env step (physics, detection, rewards, bookkeeping,
-auto-reset), timed apart from compilation. `bare=True` times the MJX physics alone for comparison."""
+auto-reset), timed apart from compilation, under either MJX implementation (`EnvConfig.physics`). `bare=True` times
+the MJX physics alone for comparison. Each run also reports how often the constraint solver used all its iterations
+at the last physics step of a control step and, under Warp, the most contacts the envs had at once."""
 from __future__ import annotations
 
 import time
@@ -26,9 +28,15 @@ def default_songs(hand: str):
 
 
 def bench_env(hand: str, n_envs: int, steps: int, *, bare: bool = False, noise: float = 0.05, seed: int = 0,
-              backend: str = "jax") -> dict:
-    env = envs.make(hand, default_songs(hand), backend=backend)
+              physics: str = "auto") -> dict:
+    env = envs.make(hand, default_songs(hand), physics=physics, warp_envs=n_envs)
     keys = jax.random.split(jax.random.PRNGKey(seed), n_envs)
+
+    def solver(data):
+        """(envs whose solver used all its iterations, contacts of all envs: Warp's count, -1 under JAX)."""
+        impl = data._impl
+        full = jnp.sum(impl.solver_niter.reshape(n_envs, -1)[:, -1] >= env.model.opt.iterations)
+        return full, impl.nacon.reshape(-1)[0] if hasattr(impl, "nacon") else jnp.int32(-1)
 
     if bare:
         data0 = jax.vmap(env.reset)(keys).body.data
@@ -40,7 +48,8 @@ def bench_env(hand: str, n_envs: int, steps: int, *, bare: bool = False, noise: 
         def body(carry, _):
             data, key = carry
             key, sub = jax.random.split(key)
-            return (jax.vmap(one)(data, jax.random.split(sub, n_envs)), key), None
+            data = jax.vmap(one)(data, jax.random.split(sub, n_envs))
+            return (data, key), solver(data)
         carry0 = (data0, jax.random.PRNGKey(seed + 1))
     else:
         state0 = jax.vmap(env.reset)(keys)
@@ -49,20 +58,26 @@ def bench_env(hand: str, n_envs: int, steps: int, *, bare: bool = False, noise: 
             state, key = carry
             key, sub = jax.random.split(key)
             action = noise * jax.random.normal(sub, (n_envs, env.action_size))
-            return (jax.vmap(env.step)(state, action), key), None
+            state = jax.vmap(env.step)(state, action)
+            return (state, key), solver(state.body.data)
         carry0 = (state0, jax.random.PRNGKey(seed + 1))
 
-    run = jax.jit(lambda c: jax.lax.scan(body, c, None, length=steps)[0])
+    run = jax.jit(lambda c: jax.lax.scan(body, c, None, length=steps))
     t0 = time.perf_counter()
     compiled = run.lower(carry0).compile()
     compile_s = time.perf_counter() - t0
-    out = jax.block_until_ready(compiled(carry0))           # warm-up
     t0 = time.perf_counter()
-    out = jax.block_until_ready(compiled(out))
+    out, _ = jax.block_until_ready(compiled(carry0))           # warm-up (Warp builds its kernels on first use)
+    first_s = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    out, (full, contacts) = jax.block_until_ready(compiled(out))
     run_s = time.perf_counter() - t0
     rate = n_envs * steps / run_s
-    return {"hand": hand, "envs": n_envs, "steps": steps, "bare": bare, "compile_s": compile_s, "run_s": run_s,
+    return {"hand": hand, "envs": n_envs, "steps": steps, "bare": bare, "physics": env.physics,
+            "compile_s": compile_s, "first_run_s": first_s, "run_s": run_s,
             "control_steps_per_s": rate, "physics_steps_per_s": rate * S.SUBSTEPS,
+            "solver_at_limit": float(np.mean(np.asarray(full))) / n_envs, "solver_iterations": env.model.opt.iterations,
+            "max_contacts": int(np.max(np.asarray(contacts))),
             "device": jax.devices()[0].device_kind, "backend": jax.default_backend()}
 
 

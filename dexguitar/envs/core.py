@@ -19,7 +19,6 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 import mujoco
-import numpy as np
 from flax import struct
 
 from dexguitar import mjx as _quiet_mjx
@@ -30,6 +29,7 @@ from dexguitar.music import cursor as CU
 from dexguitar.music import timeline as TL
 from dexguitar.world import detect
 from dexguitar.world import hands as H
+from dexguitar.world import physics as P
 from dexguitar.world import scene as S
 from dexguitar.world.geometry import positive_w, quat_conj, quat_mul, quat_to_mat
 from dexguitar.world.guitar import N_STRINGS, Guitar
@@ -70,6 +70,10 @@ class EnvConfig:
     right_feedforward: bool = False      # the right action likewise, on the right planner's
     margin_reward: float = 0.0           # not in the paper: added to each string's column times its press margin
                                          # (`rewards.margin_reward`), a smooth measure of how robustly it plays
+    physics: str = "auto"                # MJX's "jax" or "warp" implementation; "auto": Warp on a GPU where warp-lang
+                                         # is installed, else JAX (`world.physics.resolve`)
+    warp_envs: int = 4096                # Warp: the most envs stepped at once; its contact buffer, which all envs
+                                         # share, is sized for them (`world.physics.warp_sizes`)
 
     def evaluation(self) -> "EnvConfig":
         return dataclasses.replace(self, sequential=True, shift_prob=0.0, tempo_prob=0.0, pick_depth=0.0,
@@ -140,18 +144,14 @@ class GuitarEnv:
     reward_columns: tuple[str, ...] = ()
     reward_weights: tuple[float, ...] = ()     # PPO weight of each column (Eq. 9), beside the columns they weigh
 
-    def __init__(self, songs: TL.Timeline, config: EnvConfig = EnvConfig(), backend: str = "jax"):
+    def __init__(self, songs: TL.Timeline, config: EnvConfig = EnvConfig()):
         if songs.n_notes.ndim == 0:
             songs = TL.stack([songs])
+        self.physics = P.resolve(config.physics)
         self.config = config
         self.songs = songs
         self.guitar = Guitar(mirror=config.mirror)
         self.model = S.build_model(self.scene, mirror=config.mirror)
-        # this process's own device: MJX's default is jax.devices()[0], which in a run of several processes
-        # (`--distributed`) is the first process's, out of reach of the others
-        device = jax.local_devices()[0]
-        self.mjx_model = mjx.put_model(self.model, impl=backend, device=device)
-        self.hands = tuple(S.hand_index(self.model, r) for r in self.roles)
         pos, rot = S.guitar_pose(self.model)
         self._g_pos, self._g_rot = jnp.asarray(pos, jnp.float32), jnp.asarray(rot, jnp.float32)
         self._g_quat_inv = quat_conj(jnp.asarray(S.guitar_quat(config.mirror), jnp.float32))
@@ -162,10 +162,13 @@ class GuitarEnv:
         d = mujoco.MjData(self.model)
         mujoco.mj_resetDataKeyframe(self.model, d, 0)
         mujoco.mj_kinematics(self.model, d)
-        self._data0 = mjx.put_data(self.model, d, impl=backend, device=device)
+        # this process's own device: MJX's default is jax.devices()[0], which in a run of several processes
+        # (`--distributed`) is the first process's, out of reach of the others
+        self.mjx_model, self._data0 = P.put(self.model, d, self.physics, config.warp_envs, jax.local_devices()[0])
+        self._fills = P.fills(self._data0)
+        self.hands = tuple(S.hand_index(self.model, r) for r in self.roles)
         self._jnt_lo = jnp.asarray(self.model.jnt_range[:, 0], jnp.float32)
         self._jnt_hi = jnp.asarray(self.model.jnt_range[:, 1], jnp.float32)
-        self._contact_pairs = self._pick_contacts()
 
     def bind(self, songs: TL.Timeline) -> "GuitarEnv":
         """This env over other songs of the same capacities (e.g. traced arguments of a jitted function)."""
@@ -235,20 +238,12 @@ class GuitarEnv:
     def pick_point(self, data):
         return self.to_guitar(data.site_xpos[self.hands[self.roles.index("right")].pick])
 
-    def _pick_contacts(self):
-        """Contact slots of the thumb-index pairs (r_contact of Eq. 15)."""
-        if "right" not in self.roles:
-            return None
-        names = [mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_GEOM, g) for g in range(self.model.ngeom)]
-        thumb = names.index("rh_thumb3")
-        index = {names.index("rh_index2"), names.index("rh_index3")}
-        g = np.asarray(self._data0._impl.contact.geom)
-        slots = [k for k, (a, b) in enumerate(g) if {a, b} & {thumb} and {a, b} & index]
-        return jnp.asarray(slots, jnp.int32)
-
     def thumb_index_contact(self, data):
-        contact = data._impl.contact
-        return jnp.any(contact.dist[self._contact_pairs] < 1e-3).astype(jnp.float32)
+        """r_contact of Eq. 15 (the thumb on the index finger, holding the pick): 0, as in the rewards every shipped
+        right hand was trained with, whose contact slots were looked up in a Data before any collision and so were
+        none. Measuring it (the thumb3-index2/3 capsule distance from `geom_xpos`, `geom_xmat`, which both
+        implementations provide) changes the right hand's reward."""
+        return jnp.float32(0.0)
 
     # ------------------------------------------------------------------------ goals
     def hand_goal(self, role: str, cursor: CU.Cursor, picking: Picking):
@@ -275,7 +270,7 @@ class GuitarEnv:
         scale = 0.0 if self.planned else self.config.init_noise
         noise = jax.random.uniform(k_noise, self._home.shape, minval=-1.0, maxval=1.0) * scale
         qpos = jnp.clip(home + noise, self._jnt_lo, self._jnt_hi)
-        data = self._data0.replace(qpos=qpos, qvel=qvel, ctrl=qpos)
+        data = P.refill(self._data0, self._fills).replace(qpos=qpos, qvel=qvel, ctrl=qpos)
         data = mjx.kinematics(self.mjx_model, data)
         links = self.link_states(data)
         feats = self.link_features(links, links)

@@ -15,10 +15,7 @@ import jax
 import jax.numpy as jnp
 
 from dexguitar.music import cursor as CU
-
-
-def tree_where(cond, a, b):
-    return jax.tree.map(lambda x, y: jnp.where(cond, x, y), a, b)
+from dexguitar.world.physics import where as tree_where
 
 
 class Wrapper:

@@ -8,6 +8,7 @@ before and after (`policy.unsynchronized`) reuses it.
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import time
@@ -23,6 +24,7 @@ from dexguitar.learn.policy import PolicySpec, act_fn, unsynchronized
 from dexguitar.learn.tracing import fresh_trace
 from dexguitar import planner
 from dexguitar.music import timeline as TL
+from dexguitar.world import physics as P
 
 HANDS = {"left": ("left",), "right": ("right",), "duet": ("left", "right", "both")}
 # Songs a CPU plays at once in the duet. Five or six in one program stalled XLA's CPU run on a 2-core machine every
@@ -54,8 +56,7 @@ def rollout_notes(env, act, params, song_index, key, hands):
 
     def body(carry):
         playing = ~carry[0].done
-        return jax.tree.map(lambda new, old: jnp.where(playing.reshape((-1,) + (1,) * (new.ndim - 1)), new, old),
-                            jax.vmap(one)(*carry), carry)
+        return P.where(playing, jax.vmap(one)(*carry), carry)
     state = jax.vmap(env.reset)(key, song_index)
     n = song_index.shape[0]
     carry = (state, jnp.zeros((n, W, len(hands), 6), jnp.float32), jnp.zeros((n, W), bool))
@@ -76,7 +77,7 @@ def rollout_song(env, act, song_index: int, frames: int, key=None, xs=None):
         info = jax.tree.map(lambda x: jnp.where(alive, x, jnp.zeros_like(x)), nxt.info)
         info["links"] = nxt.body.links
         info["qpos"] = nxt.body.data.qpos
-        return jax.tree.map(lambda a, b: jnp.where(state.done, a, b), state, nxt), (info, alive)
+        return P.where(state.done, state, nxt), (info, alive)
     _, (info, alive) = jax.lax.scan(one, state, xs, length=frames)
     return info, alive
 
@@ -209,6 +210,8 @@ def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str |
     size = max(len(songs), 1)
     if jax.default_backend() == "cpu":
         size = min(size, CPU_DUET_SONGS if hand == "duet" else CPU_HAND_SONGS)
+    if P.resolve(cfg.physics) == "warp":
+        cfg = dataclasses.replace(cfg, warp_envs=size)     # Warp's contact buffer: one env per song
     timelines = [TL.from_song(s) for s in songs]
     if size < len(songs) and (cfg.feedforward or cfg.right_feedforward):   # plan every song in one pool; the
         every = TL.batch(timelines)                                           # chunks read the plans' disk cache
