@@ -11,8 +11,7 @@
 The file's key hashes everything the program is made of except the values of its arguments (songs, reference
 motion, frozen policies): the package's files, the versions, the devices, the trainer's config (but the seed and
 the run's length, which the chunk does not read), its policy spec and those of the frozen policies it plays, and the
-arguments' shapes. The chunk closes over
-nothing else (`trainer.Data`).
+arguments' shapes. The chunk closes over nothing else (`trainer.Data`).
 """
 from __future__ import annotations
 
