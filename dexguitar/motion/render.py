@@ -16,10 +16,10 @@ import mujoco
 import numpy as np
 
 from dexguitar.motion import glcheck
-from dexguitar.motion import kinematics as K
 from dexguitar.motion.format import Motion
 from dexguitar.world import scene as S
 from dexguitar.world import stage
+from dexguitar.world.kinematics import hand_kinematics
 
 
 # ----------------------------------------------------------------------------------------------------- PNG
@@ -126,7 +126,7 @@ class MotionRenderer:
         self.width, self.height = width, height
         self.data = mujoco.MjData(m)
         mujoco.mj_resetDataKeyframe(m, self.data, 0)
-        kin = K.hand_kinematics(motion.hand, mirror)
+        kin = hand_kinematics(motion.hand, mirror)
         self.qpos = kin.model_qpos(motion.hand, motion.qpos)
         self.qadr = np.asarray(S.hand_index(m, motion.hand).qpos)
         self._screen = Offscreen(m, width, height)
