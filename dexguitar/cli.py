@@ -15,6 +15,7 @@ code (2). Anything else is a bug and keeps its traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import json
 import os
@@ -44,6 +45,7 @@ from dexguitar.perform import pipeline, plots
 from dexguitar.perform import play as PL
 from dexguitar.perform.evaluate import dumps, evaluate, evaluate_synchronizer
 from dexguitar.shipped import policies_dir
+from dexguitar.world import physics as P
 
 POLICIES = policies_dir()        # $DEXGUITAR_POLICIES, else models/policies as installed (`shipped`)
 
@@ -174,27 +176,37 @@ def _material(args, hand: str):
     return procedural.material(hand, args.style, 0, args.procedural)
 
 
+def _physics_set(args) -> list[str]:
+    """--set with --physics as the EnvConfig field it sets."""
+    return args.set + ([f"env.physics={args.physics}"] if args.physics else [])
+
+
 def _train(args) -> int:
-    cfg, env_cfg = load_config(args.config, args.set, hand=args.hand, num_envs=args.envs, minibatch=args.minibatch,
-                               seed=args.seed, iterations=args.iterations)
+    with P.stdout_to_stderr():            # stdout: the summary alone, whatever the physics prints while training
+        summary = _training(args)
+    print(dumps(summary))
+    return 0
+
+
+def _training(args) -> dict:
+    cfg, env_cfg = load_config(args.config, _physics_set(args), hand=args.hand, num_envs=args.envs,
+                               minibatch=args.minibatch, seed=args.seed, iterations=args.iterations)
     check_out(args.out, args.resume)
     songs = _material(args, cfg.hand)
     motion = load_motion(args.motion or cfg.hand)
     if args.init_from:
         residual = bool(env_cfg and (env_cfg.feedforward or env_cfg.right_feedforward))
         check_init(args.init_from, cfg.hand, residual, cfg.action_scale)            # before building anything
-    trainer = Trainer(cfg, [TL.from_song(s) for s in songs], reference_frames(motion), env_cfg)
+    trainer = Trainer(cfg, [TL.from_song(s) for s in songs], reference_frames(motion), env_cfg, args.devices)
     check_envs(cfg.num_envs, *training_bytes(trainer), devices=args.devices)
     print(f"training the {cfg.hand} hand on {len(songs)} song{'s' * (len(songs) != 1)} with {cfg.num_envs} envs x "
-          f"{cfg.horizon} steps ({cfg.batch} samples per iteration) on {jax.devices()[0].device_kind}; "
-          f"reference motion {motion.name} ({motion.qpos.shape[0] / motion.fps:.1f} s); writing {args.out}",
-          file=sys.stderr)
-    summary = train(trainer, args.out, iterations=cfg.iterations, resume=args.resume,
-                    meta={"songs": [s.title for s in songs], "motion": motion.name},
-                    stop_after_calls=args.stop_after_calls, max_minutes=args.max_minutes, init_from=args.init_from,
-                    devices=args.devices)
-    print(dumps(summary))
-    return 0
+          f"{cfg.horizon} steps ({cfg.batch} samples per iteration) on {jax.devices()[0].device_kind} "
+          f"({trainer.env.physics} physics); reference motion {motion.name} "
+          f"({motion.qpos.shape[0] / motion.fps:.1f} s); writing {args.out}", file=sys.stderr)
+    return train(trainer, args.out, iterations=cfg.iterations, resume=args.resume,
+                 meta={"songs": [s.title for s in songs], "motion": motion.name},
+                 stop_after_calls=args.stop_after_calls, max_minutes=args.max_minutes, init_from=args.init_from,
+                 devices=args.devices)
 
 
 def _song_source(source: str) -> str:
@@ -223,30 +235,33 @@ def _sync(args) -> int:
     overrides = dict(hand="duet", num_envs=args.envs, minibatch=args.minibatch, seed=args.seed,
                      iterations=args.iterations)
     if recorded and not args.config:
-        cfg, env_cfg = recorded_config(recorded, args.set, **overrides)
+        cfg, env_cfg = recorded_config(recorded, _physics_set(args), **overrides)
     else:
-        cfg, env_cfg = load_config(args.config, args.set, **overrides)
+        cfg, env_cfg = load_config(args.config, _physics_set(args), **overrides)
     check_out(out, args.resume)
     songs = [load_song(s, track=track) for s in song_files]
     pair = PO.load_pair(left, right)
     motion = load_motion(args.motion or "left")
-    trainer = SyncTrainer(cfg, [TL.from_song(s) for s in songs], reference_frames(motion), *pair, env_cfg)
-    check_envs(cfg.num_envs, *training_bytes(trainer), devices=args.devices)
-    print(f"synchronizing {left} + {right} on {', '.join(s.title for s in songs)} with {cfg.num_envs} envs x "
-          f"{cfg.horizon} steps ({cfg.batch} samples per iteration) on {jax.devices()[0].device_kind}; "
-          f"writing {out}", file=sys.stderr)
-    summary = train(trainer, out, iterations=cfg.iterations, resume=args.resume,
-                    meta={"songs": [s.title for s in songs], "motion": motion.name, "left": str(left),
-                          "right": str(right), "song_files": [_song_source(s) for s in song_files],
-                          **({"track": track} if track is not None else {})},
-                    stop_after_calls=args.stop_after_calls, max_minutes=args.max_minutes, devices=args.devices)
-    print(dumps(summary), file=sys.stderr)
-    if args.no_eval:
-        return 0
-    params, meta = PO.load(out)
-    staged = evaluate_synchronizer(params, PO.PolicySpec.from_meta(meta), songs)
-    (out / "eval.json").write_text(dumps({stage: {k: v["summary"] for k, v in r.items()}
-                                          for stage, r in staged.items()}, indent=2))
+    with P.stdout_to_stderr():            # stdout: the results, below
+        trainer = SyncTrainer(cfg, [TL.from_song(s) for s in songs], reference_frames(motion), *pair, env_cfg,
+                              args.devices)
+        check_envs(cfg.num_envs, *training_bytes(trainer), devices=args.devices)
+        print(f"synchronizing {left} + {right} on {', '.join(s.title for s in songs)} with {cfg.num_envs} envs x "
+              f"{cfg.horizon} steps ({cfg.batch} samples per iteration) on {jax.devices()[0].device_kind} "
+              f"({trainer.env.physics} physics); writing {out}", file=sys.stderr)
+        summary = train(trainer, out, iterations=cfg.iterations, resume=args.resume,
+                        meta={"songs": [s.title for s in songs], "motion": motion.name, "left": str(left),
+                              "right": str(right), "song_files": [_song_source(s) for s in song_files],
+                              **({"track": track} if track is not None else {})},
+                        stop_after_calls=args.stop_after_calls, max_minutes=args.max_minutes, devices=args.devices)
+        print(dumps(summary), file=sys.stderr)
+        if args.no_eval:
+            return 0
+        params, meta = PO.load(out)
+        staged = evaluate_synchronizer(params, PO.PolicySpec.from_meta(meta), songs,
+                                       E.EnvConfig(physics=trainer.env.physics))
+        (out / "eval.json").write_text(dumps({stage: {k: v["summary"] for k, v in r.items()}
+                                              for stage, r in staged.items()}, indent=2))
     for stage, results in staged.items():
         _print_results(results, f"[{stage} synchronization] ")
     return 0
@@ -299,14 +314,16 @@ def _eval(args) -> int:
     keep = (lambda r: r) if args.notes else (lambda r: {k: v["summary"] for k, v in r.items()})
     env_config = E.EnvConfig(physics=args.physics)
     if spec.kind == "synchronizer" and args.ckpt:   # before and after synchronization
-        staged = evaluate_synchronizer(params, spec, songs, env_config)
+        with P.stdout_to_stderr():        # stdout: the results alone
+            staged = evaluate_synchronizer(params, spec, songs, env_config)
         if args.json:
             print(dumps({stage: keep(r) for stage, r in staged.items()}, indent=2))
             return 0
         for stage, results in staged.items():
             _print_results(results, f"[{stage} synchronization] ")
         return 0
-    results = evaluate(params, spec, songs, env_config)
+    with P.stdout_to_stderr():
+        results = evaluate(params, spec, songs, env_config)
     if args.json:
         print(dumps(keep(results), indent=2))
         return 0
@@ -352,9 +369,11 @@ def _play(args) -> int:
         params, spec = PL.pair(args.left, args.right)
     width, height = args.size
     song = args.song if args.track is None else load_song(args.song, track=args.track)
-    report = PL.perform(song, params, spec, args.out, seconds=args.seconds, video=not args.frames_only,
-                        video_fps=args.fps, width=width, height=height, camera=args.camera, captions=args.caption,
-                        quiet=args.json, motion=args.motion)
+    with P.stdout_to_stderr() if args.json else contextlib.nullcontext():     # stdout: the report alone
+        report = PL.perform(song, params, spec, args.out, seconds=args.seconds, video=not args.frames_only,
+                            video_fps=args.fps, width=width, height=height, camera=args.camera,
+                            captions=args.caption, quiet=args.json, motion=args.motion,
+                            env_config=E.EnvConfig(physics=args.physics).evaluation())
     if args.json:
         print(dumps(report, indent=1))
     return 0
@@ -391,6 +410,8 @@ def _add_run_args(p: argparse.ArgumentParser, out_help: str) -> None:
     p.add_argument("--coordinator", help="host:port of process 0 (with --distributed)")
     p.add_argument("--num-processes", type=positive)
     p.add_argument("--process-id", type=int)
+    p.add_argument("--physics", choices=E.PHYSICS, help="MJX's implementation, as --set env.physics=... (default: "
+                                                        "the config's, auto: Warp on one GPU where installed)")
 
 
 CONFIG_HELP = ("a config: the name of one in dexguitar/configs/ (e.g. left_gpu, sync_hold, cpu_smoke) or a .py file "
@@ -543,6 +564,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "the `motion` file format) and OUT.bvh (both hands; metres, y-up: Blender's default BVH "
                         "import places them as in the simulation)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
+    p.add_argument("--physics", default="auto", choices=E.PHYSICS,
+                   help="MJX's implementation (auto: Warp on a GPU where warp-lang is installed, else JAX)")
     p.set_defaults(func=_play)
 
     p = sub.add_parser("plot", help="F1 against samples from runs' metrics.jsonl, or the per-chord F1 histogram "

@@ -1,5 +1,7 @@
-"""The physics switch (`EnvConfig.physics`, `world.physics.resolve`): Warp only where it can run, else JAX with one
-line that says why; a selection between states (`physics.where`) as `jnp.where` under JAX. No MJX compile."""
+"""The physics switch (`EnvConfig.physics`, `world.physics.resolve`): Warp only where it can run (one GPU), else JAX
+with one line that says why; Warp's buffers sized from a run's env count (`EnvConfig.sized`); a selection between
+states (`physics.where`) as `jnp.where` under JAX; stdout kept for a command's own output while the physics prints
+(`physics.stdout_to_stderr`). No MJX compile."""
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -51,3 +53,107 @@ def test_an_env_asked_for_warp_runs_jax_here(capsys):
     env = envs.make("left", [library.load("ode_to_joy")], physics="warp")
     assert env.physics == "jax" and env.mjx_model.impl == mjx().Impl.JAX
     assert "warning: physics 'warp' runs as 'jax' here" in capsys.readouterr().err
+
+
+def on_a_gpu_with_warp(monkeypatch):
+    """`physics.resolve` as on one GPU where warp-lang imports."""
+    real = P.resolve
+    monkeypatch.setattr(P, "resolve", lambda physics="auto", devices=1: real(physics, devices=devices,
+                                                                                 installed=True, platform="gpu"))
+
+
+def test_sized_sets_warp_envs_from_the_env_count_under_warp_alone(monkeypatch, capsys):
+    from dexguitar.envs import EnvConfig
+    P.resolve.cache_clear()
+    here = EnvConfig()
+    assert here.sized(512) is here and EnvConfig(physics="warp").sized(512).physics == "jax"   # this CPU
+    on_a_gpu_with_warp(monkeypatch)
+    sized = EnvConfig().sized(512)
+    assert (sized.physics, sized.warp_envs) == ("warp", 512)
+    assert EnvConfig(physics="jax").sized(512) == EnvConfig(physics="jax")
+    assert EnvConfig().sized(512, devices=2) == EnvConfig(physics="jax")         # several devices: JAX, quietly
+    capsys.readouterr()
+    assert EnvConfig(physics="warp").sized(512, devices=4).physics == "jax"
+    assert "not split over 4 devices" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("devices, physics, warp_envs", [(1, "warp", 64), (2, "jax", 4096)])
+def test_a_trainer_sizes_warp_for_its_num_envs(devices, physics, warp_envs, monkeypatch):
+    from dexguitar.learn import trainer as T
+    from dexguitar.music import library
+    from dexguitar.music import timeline as TL
+
+    class Made(Exception):
+        pass
+
+    def make(hand, songs, config):
+        raise Made(config)
+    on_a_gpu_with_warp(monkeypatch)
+    monkeypatch.setattr(T.E, "make", make)
+    with pytest.raises(Made) as made:
+        T.Trainer(T.TrainConfig(num_envs=64, minibatch=64), [TL.from_song(library.load("ode_to_joy"))], None,
+                  devices=devices)
+    config = made.value.args[0]
+    assert (config.physics, config.warp_envs, config.episode_frames) == (physics, warp_envs, 600)
+
+
+def test_stdout_to_stderr_keeps_stdout_for_the_document(capfd):
+    import ctypes
+    import os
+    with P.stdout_to_stderr():
+        print("from python")
+        os.write(1, b"from fd 1\n")
+        ctypes.CDLL(None).printf(b"from C's stdout\n")       # as the GPU's printf reaches the host: buffered
+    print('{"f1": 1.0}')
+    out, err = capfd.readouterr()
+    assert out == '{"f1": 1.0}\n'
+    assert all(line in err for line in ("from python", "from fd 1", "from C's stdout"))
+
+
+def test_eval_json_stays_one_document_whatever_the_play_prints(monkeypatch, capfd):
+    import json
+    import os
+    from types import SimpleNamespace
+    from dexguitar import cli
+
+    def evaluate(params, spec, songs, env_config=None):
+        print("Warp 1.18.0 initialized")
+        os.write(1, b"solver iterations limit reached - please increase iterations beyond 4\n")
+        return {"Ode": {"summary": {"left": {"f1": 1.0}}, "notes": []}}
+    monkeypatch.setattr(cli.PO, "load", lambda path: ({}, {"hand": "left"}))
+    monkeypatch.setattr(cli.PO.PolicySpec, "from_meta", staticmethod(lambda meta: SimpleNamespace(kind="policy")))
+    monkeypatch.setattr(cli, "evaluate", evaluate)
+    assert cli.main(["eval", "--ckpt", "C", "--song", "ode_to_joy", "--json", "--physics", "warp"]) == 0
+    out, err = capfd.readouterr()
+    assert json.loads(out) == {"Ode": {"left": {"f1": 1.0}}}
+    assert "solver iterations limit reached" in err and "initialized" in err
+
+
+def test_the_env_states_scalars_are_not_split_over_devices():
+    # Warp's Data holds its buffers' sizes as scalars beside the env batch: a split of them would not compile
+    import jax
+    from flax import struct
+    from dexguitar.learn.devices import Placement
+
+    @struct.dataclass
+    class State:
+        env: dict
+        params: jax.Array
+    where = Placement(1)
+    got = where.shardings(State(env={"qpos": jnp.zeros((4, 3)), "naconmax": jnp.int32(136)}, params=jnp.zeros(2)))
+    assert got.env["qpos"] == where.split and got.env["naconmax"] == where.whole and got.params == where.whole
+
+
+def test_a_run_made_before_the_physics_fields_resumes_under_jax_alone(tmp_path):
+    import json
+    from dexguitar.errors import RunError
+    from dexguitar.learn.run import RunDir
+    run = RunDir(tmp_path)
+    try:
+        run.config.write_text(json.dumps({"train": {"hand": "left"}, "env": {"shift_prob": 0.5}}))
+        env = {"shift_prob": 0.5, "physics": "auto", "warp_envs": 4096}
+        run.check_resume({"train": {"hand": "left"}, "env": env})
+        with pytest.raises(RunError, match="env.physics: 'auto' -> 'warp'; env.warp_envs: 4096 -> 64"):
+            run.check_resume({"train": {"hand": "left"}, "env": dict(env, physics="warp", warp_envs=64)})
+    finally:
+        run.close()

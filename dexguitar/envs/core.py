@@ -79,6 +79,18 @@ class EnvConfig:
         return dataclasses.replace(self, sequential=True, shift_prob=0.0, tempo_prob=0.0, pick_depth=0.0,
                                    init_noise=0.0, rest_frames=self.count_in)
 
+    def sized(self, envs: int, devices: int = 1) -> "EnvConfig":
+        """This config for `envs` envs stepped at once over `devices` devices (a training run's `num_envs`, an
+        evaluation's batch of songs): under Warp, `warp_envs` set to `envs` and `physics` to "warp"; where Warp
+        cannot run (`world.physics.resolve`, several devices included), `physics` "jax"; else this config itself,
+        unchanged, so a JAX run's config (and its compiled programs' keys) is the same whether it was sized or not."""
+        physics = P.resolve(self.physics, devices=devices)
+        if physics == "warp":
+            return dataclasses.replace(self, physics="warp", warp_envs=int(envs))
+        if self.physics == "warp" or P.resolve(self.physics) == "warp":     # asked for, or one device would run it
+            return dataclasses.replace(self, physics="jax")
+        return self
+
     def window_args(self) -> dict:
         """The keyword arguments of `cursor.sample_window`."""
         return {k: getattr(self, k) for k in ("sequential", "window_notes", "rest_frames", "max_note_frames",

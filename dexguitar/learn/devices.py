@@ -24,8 +24,10 @@ class Placement:
         self.main = jax.process_index() == 0          # only the first process writes files
 
     def shardings(self, state):
-        """The sharding of every leaf of a `TrainState`."""
-        return jax.tree.map(lambda _: self.whole, state).replace(env=jax.tree.map(lambda _: self.split, state.env))
+        """The sharding of every leaf of a `TrainState`. The env states' scalars are whole: MJX's Warp Data holds
+        sizes outside the env batch (its contact buffer's, `world.physics.shared`), and Warp runs on one device."""
+        return jax.tree.map(lambda _: self.whole, state).replace(
+            env=jax.tree.map(lambda x: self.split if len(x.shape) else self.whole, state.env))
 
     def placed_shapes(self, shapes):
         """A `TrainState`'s shapes (`jax.eval_shape`) with this placement's shardings: what a program is lowered

@@ -6,7 +6,8 @@
 - The compiled chunk is kept on disk beside JAX's persistent cache (`<cache>/chunks/`). A later run of the same code,
   package versions, devices, XLA flags, config and shapes loads it without tracing or lowering it: ready 10.1 s after
   the trainer was built instead of 24.3 s (docs/benchmarks.md, "Compilation"). A later run in the same process
-  reuses it.
+  reuses it. Under Warp (`EnvConfig.physics`) no file is kept: the chunk is traced and lowered every run, and JAX's
+  persistent cache spares its compile.
 
 The file's key hashes everything the program is made of except the values of its arguments (songs, reference
 motion, frozen policies): the package's files, the versions, the devices, the trainer's config (but the seed and
@@ -128,7 +129,10 @@ class ChunkBuild:
         self._lower = lambda: trainer.make_train_chunk(n, where).lower(state, data)
         self._devices = list(where.mesh.devices.flat)
         self.key = key(trainer, where, n, (state, data))
-        folder = directory() if jax.process_count() == 1 else None
+        # Under Warp no file: the program's Warp calls name FFI targets and call descriptors that only a trace in
+        # this process registers (`warp.jax_callable`), so it is traced, lowered and compiled every run, and JAX's
+        # persistent cache, keyed on the traced program, spares the compile
+        folder = directory() if jax.process_count() == 1 and trainer.env.physics != "warp" else None
         self.path = folder / f"chunk-{self.key}.exe" if folder else None
         self._pool = concurrent.futures.ThreadPoolExecutor(1)
         if self.key in _LIVE:

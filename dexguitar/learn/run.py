@@ -37,6 +37,8 @@ MAX_ROLLBACKS = 3                          # non-finite states in a row before g
 CPU_ENVS = 512                             # envs from which `train` warns of XLA:CPU's LAPACK deadlock
 RESUME_FREE = ("iterations", "iterations_per_call")   # may change on --resume; nothing else may
 TRAIN_DEFAULTS = {f.name: f.default for f in dataclasses.fields(TrainConfig)}
+# EnvConfig fields newer than the runs that lack them, with the value those runs had (their envs ran MJX's JAX physics)
+ENV_ADDED = {"physics": "auto", "warp_envs": 4096}
 KEPT = ("params", "obs_norm", "disc_norm", "popart", "key", "iteration")
 
 
@@ -159,6 +161,7 @@ class RunDir:
                 diffs += [f"train.{k}: {a.get(k)!r} -> {b.get(k)!r}" for k in sorted(set(a) | set(b))
                           if a.get(k) != b.get(k)]
             elif key == "env" and a != b:
+                a, b = ({**ENV_ADDED, **x} if x is not None else None for x in (a, b))
                 diffs += [f"env.{k}: {a.get(k)!r} -> {b.get(k)!r}" for k in sorted(set(a or {}) | set(b or {}))
                           if (a or {}).get(k) != (b or {}).get(k)]
             elif key not in ("env", "train") and a != b and key in old:   # a key newer than the run: not compared

@@ -33,14 +33,15 @@ class SyncTrainer(Trainer):
     """The single-hand trainer in the duet env, with the synchronizer as its policy and both hands' policies frozen.
     Everything else (rollout, discriminators, per-column GAE, PopArt, PPO, checkpoints) is shared."""
 
-    def __init__(self, config: TrainConfig, songs, reference, left, right, env_config=None):
+    def __init__(self, config: TrainConfig, songs, reference, left, right, env_config=None,
+                 devices: int | None = None):
         """left, right: (params {"policy", "obs_norm"}, meta) of exported single-hand policies."""
         if config.hand != "duet":
             config = dataclasses.replace(config, hand="duet")
         self.left_spec = PolicySpec.from_meta(left[1])                                 # read by make_spec
         env_config = dataclasses.replace(env_config or SYNC_ENV, feedforward=self.left_spec.feedforward,
                                          right_feedforward=PolicySpec.from_meta(right[1]).right_feedforward)
-        super().__init__(config, songs, reference, env_config)
+        super().__init__(config, songs, reference, env_config, devices)
         check_pair(left[1], right[1], self.layout, where=(left[1].get("path", "LEFT"), right[1].get("path",
                                                                                                     "RIGHT")))
         self.frozen = {"left": left[0], "right": right[0]}

@@ -143,14 +143,18 @@ def finite(tree) -> jnp.ndarray:
 class Trainer:
     """Builds the networks and the jitted iteration for one hand over a song batch and reference motions."""
 
-    def __init__(self, config: TrainConfig, songs, reference: jnp.ndarray | None, env_config=None):
+    def __init__(self, config: TrainConfig, songs, reference: jnp.ndarray | None, env_config=None,
+                 devices: int | None = None):
         """songs: timelines (or a batch); reference: (T, 16, 7) link poses of the reference motion at 60 Hz (see
-        `dexguitar.motion`), or None for no imitation."""
+        `dexguitar.motion`), or None for no imitation. `devices`: how many devices the run spreads its envs over
+        (default: every device, as `run.train`'s); the env's physics is chosen and sized for them
+        (`EnvConfig.sized`)."""
         config.check()
         self.config = config
         if not isinstance(songs, TL.Timeline):
             songs = TL.batch(list(songs))
-        self.env = E.make(config.hand, songs, env_config)
+        env_config = env_config or E.EnvConfig(episode_frames=1200 if config.hand == "duet" else 600)  # envs.make's
+        self.env = E.make(config.hand, songs, env_config.sized(config.num_envs, devices or len(jax.devices())))
         self.layout = self.env.layout
         self.spec = self.make_spec()
         self.disc_specs = IM.DISCRIMINATORS[config.hand] if reference is not None else {}

@@ -8,7 +8,6 @@ before and after (`policy.unsynchronized`) reuses it.
 """
 from __future__ import annotations
 
-import dataclasses
 import json
 import math
 import time
@@ -210,8 +209,7 @@ def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str |
     size = max(len(songs), 1)
     if jax.default_backend() == "cpu":
         size = min(size, CPU_DUET_SONGS if hand == "duet" else CPU_HAND_SONGS)
-    if P.resolve(cfg.physics) == "warp":
-        cfg = dataclasses.replace(cfg, warp_envs=size)     # Warp's contact buffer: one env per song
+    cfg = cfg.sized(size)                  # under Warp, its contact buffer for one env per song of a batch
     timelines = [TL.from_song(s) for s in songs]
     if size < len(songs) and (cfg.feedforward or cfg.right_feedforward):   # plan every song in one pool; the
         every = TL.batch(timelines)                                           # chunks read the plans' disk cache

@@ -73,7 +73,7 @@ def play(song, params, spec: PO.PolicySpec, *, seconds: float | None = None, env
     Steps are mapped to window rows by the rows' durations (a sequential window is played row after row from
     step 0), not by `song_note`, so a grace rest the env may put before the song (row 0, song note -1) is handled
     whether it is there or not."""
-    config = spec.env_config(env_config or envs.EnvConfig().evaluation())
+    config = spec.env_config(env_config or envs.EnvConfig().evaluation()).sized(1)
     env = envs.make("duet", [TL.from_song(song)], config)
     if not env.config.sequential:
         raise ValueError("play needs an evaluation config (EnvConfig().evaluation()): whole songs from the start")

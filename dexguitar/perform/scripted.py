@@ -153,7 +153,7 @@ def table(names=SINGLE_NOTE_SONGS, envs_=("left", "right"), echo=False, songs=No
     if echo:
         print("\n".join(rows), flush=True)
     for kind in envs_:
-        env = envs.make(kind, timelines, envs.EnvConfig().evaluation())
+        env = envs.make(kind, timelines, envs.EnvConfig().evaluation().sized(len(timelines)))
         results = ScriptedPlayer(env).play(np.arange(len(names)))
         hands = ("left", "right", "both") if kind == "duet" else (kind,)
         for name, res in zip(names, results):

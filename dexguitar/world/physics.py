@@ -8,7 +8,10 @@ between two states (`where`) takes those from one side, never `jnp.where`s them,
 through what both implementations provide (positions of bodies, sites and geoms)."""
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import functools
+import os
 import sys
 
 import jax
@@ -57,11 +60,14 @@ def warp_installed() -> bool:
 
 
 @functools.cache
-def resolve(physics: str = "auto", *, installed: bool | None = None, platform: str | None = None) -> str:
-    """"jax" or "warp": the implementation `physics` ("auto", "jax" or "warp") runs on here. "auto" is Warp where
-    `warp` imports and JAX's default backend is a GPU, else JAX; "warp" where it cannot run is JAX, with one line on
-    stderr saying why. `installed` and `platform` (JAX's default backend) stand in for this machine's. Cached: the
-    line is printed once per process."""
+def resolve(physics: str = "auto", *, devices: int = 1, installed: bool | None = None,
+            platform: str | None = None) -> str:
+    """"jax" or "warp": the implementation `physics` ("auto", "jax" or "warp") runs on here, for envs spread over
+    `devices` devices. "auto" is Warp where `warp` imports, JAX's default backend is a GPU and the envs are on one
+    device, else JAX; "warp" where it cannot run is JAX, with one line on stderr saying why. Warp keeps one contact
+    buffer for all the envs of a program (`shared`), which a split of the envs over devices would cut apart.
+    `installed` and `platform` (JAX's default backend) stand in for this machine's. Cached: the line is printed once
+    per process."""
     if physics not in PHYSICS:
         raise ValueError(f"physics {physics!r}: expected one of {', '.join(PHYSICS)}")
     if physics == "jax":
@@ -69,12 +75,49 @@ def resolve(physics: str = "auto", *, installed: bool | None = None, platform: s
     installed = warp_installed() if installed is None else installed
     platform = jax.default_backend() if platform is None else platform
     why = ("warp-lang is not installed (pip install 'dexguitar[warp]')" if not installed else
-           None if platform == "gpu" else f"no GPU (JAX runs on {platform})")
+           f"no GPU (JAX runs on {platform})" if platform != "gpu" else
+           f"Warp's shared contact buffer is not split over {devices} devices (--devices 1 runs Warp)"
+           if devices > 1 else None)
     if why is None:
         return "warp"
     if physics == "warp":
         print(f"warning: physics 'warp' runs as 'jax' here: {why}", file=sys.stderr, flush=True)
     return "jax"
+
+
+@contextlib.contextmanager
+def stdout_to_stderr():
+    """Inside the block, whatever is written to stdout goes to stderr: Python's prints and what native code writes
+    to file descriptor 1. Warp's kernels print their warnings ("solver iterations limit reached ...", the overflow
+    warnings that `m.opt.warn_overflow` selects) with the GPU's printf, which the CUDA driver hands to C's buffered
+    stdout when the host next waits on the GPU, not to Python's `sys.stdout`; a command whose stdout is one document
+    (`eval --json`, `play --json`, `train`'s summary) computes inside this block and prints the document after it.
+    The warnings stay readable on stderr rather than silenced: they say the solver ran out of iterations."""
+    sys.stdout.flush()
+    _flush_c_stdout()
+    try:
+        saved = os.dup(1)
+    except OSError:                         # no file descriptor 1 at all
+        saved = None
+    if saved is not None:
+        os.dup2(2, 1)
+    real, sys.stdout = sys.stdout, sys.stderr
+    try:
+        yield
+    finally:
+        sys.stderr.flush()
+        _flush_c_stdout()                   # what C's stdout still holds goes to stderr, before fd 1 is restored
+        if saved is not None:
+            os.dup2(saved, 1)
+            os.close(saved)
+        sys.stdout = real
+
+
+def _flush_c_stdout() -> None:
+    try:
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError, TypeError):    # no C library to reach (not Linux or macOS)
+        pass
 
 
 # ------------------------------------------------------------------------------------------------ model and data
@@ -90,12 +133,19 @@ def warp_sizes(model: mujoco.MjModel, envs: int) -> dict:
 
 def put(model: mujoco.MjModel, data: mujoco.MjData, physics: str, envs: int, device=None):
     """(mjx.Model, mjx.Data) of `physics` ("jax" or "warp", resolved) on `device`; Warp's buffers hold `envs` envs."""
-    sizes = {}
-    if physics == "warp":
-        _mjx_warp.warp.config.quiet = True      # Warp's banner and kernel-load lines go to stdout (`--json` output)
-        sizes = warp_sizes(model, envs)
-    return (mjx.put_model(model, impl=physics, device=device),
-            mjx.put_data(model, data, impl=physics, device=device, **sizes))
+    if physics != "warp":
+        return mjx.put_model(model, impl=physics, device=device), mjx.put_data(model, data, impl=physics, device=device)
+    wp = _mjx_warp.warp
+    wp.config.log_level = wp.LOG_WARNING     # not Warp's greeting and kernel-load lines, which it prints to stdout
+    mjx_model = mjx.put_model(model, impl=physics, device=device)
+    # The solver's "iterations limit reached" lines are not printed: with the scenes' 4 iterations (JAX's behaviour
+    # too, silently) they come every few steps, thousands a training chunk. How often the solver used them all is
+    # what `bench env` measures (`solver_at_limit`). Buffer overflows are still printed.
+    quiet = int(_mjx_warp.mjwp_types.OverflowType.ITERATIONS | _mjx_warp.mjwp_types.OverflowType.LS_ITERATIONS)
+    opt = mjx_model.opt
+    mjx_model = mjx_model.replace(opt=opt.replace(_impl=opt._impl.replace(
+        warn_overflow=int(opt._impl.warn_overflow) & ~quiet)))
+    return mjx_model, mjx.put_data(model, data, impl=physics, device=device, **warp_sizes(model, envs))
 
 
 def shared(data) -> set:
