@@ -230,7 +230,7 @@ def _sync(args) -> int:
         raise UserError("sync: give --left and --right (exported policies or run directories), or neither for the "
                         "general pair")
     if not song_files:
-        raise UserError(f"sync: give --song (tab files or embedded song names)"
+        raise UserError("sync: give --song (tab files or embedded song names)"
                         + (f"; {out / 'config.json'} records none" if recorded else ""))
     overrides = dict(hand="duet", num_envs=args.envs, minibatch=args.minibatch, seed=args.seed,
                      iterations=args.iterations)

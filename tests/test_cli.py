@@ -143,8 +143,10 @@ def test_set_reaches_the_trainer(tmp_path, monkeypatch):
     class Built(Exception):
         pass
 
-    def trainer(cfg, songs, reference, *rest):
-        built.update(cfg=cfg, env=rest[-1])
+    def trainer(cfg, songs, reference, *rest):          # rest: (frozen pair,) env config, devices
+        from dexguitar.envs import EnvConfig
+        (env,) = [r for r in rest if isinstance(r, EnvConfig)]
+        built.update(cfg=cfg, env=env)
         raise Built
     monkeypatch.setattr(cli, "Trainer", trainer)
     monkeypatch.setattr(cli, "SyncTrainer", trainer)

@@ -26,7 +26,7 @@ def test_four_devices_match_one_and_a_four_device_run_resumes_on_one(left_traine
                           env=env, cwd=ROOT, capture_output=True, text=True, timeout=1500)
     assert done.returncode == 0, done.stderr[-3000:]
     out = json.loads(done.stdout.strip().splitlines()[-1])
-    assert out["devices"] == 4 and out["chunks"] == ["compiled"]
+    assert out["devices"] == 4 and out["chunks"] in (["compiled"], ["loaded"])     # loaded: a cache of a run before
     assert out["split"] == ["4 devices: 1 envs and minibatches of 2 samples each"]
     # the one-device chunk runs from its file on the first device alone
     assert out["stub"] == ["compiled", "loaded"] and out["stub_devices"] == [0]

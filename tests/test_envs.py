@@ -101,10 +101,10 @@ def test_training_window_is_a_rest_then_song_notes(left):
 
 
 def test_evaluation_plays_the_song_from_its_start_and_stops():
+    from dexguitar.perform.scripted import ScriptedPlayer
     song = scale_song()
     env = envs.make("left", [song], envs.EnvConfig().evaluation())
-    reset, step = jax.jit(env.reset), jax.jit(env.step)
-    state = reset(jax.random.PRNGKey(0), 0)
+    state = jax.jit(env.reset)(jax.random.PRNGKey(0), 0)
     w = state.cursor.window
     # the 15-frame count-in, then the song: 1/8 at 100 BPM = 18 frames
     assert int(w.n) == 9 and np.asarray(w.dur)[:9].tolist() == [15] + [18] * 8
@@ -114,20 +114,18 @@ def test_evaluation_plays_the_song_from_its_start_and_stops():
     assert goal[0, 1] == 0.0 and goal[0, 6] == pytest.approx(-0.25)
     assert goal[1, 1] == pytest.approx(1 / 22) and goal[1, 6] == pytest.approx(-0.1)
     assert goal[2, 1] == pytest.approx(3 / 22) and goal[1, 0] == 0.0
-    ends, first_notes = 0, []
-    for t in range(15 + 8 * 18):
-        state = step(state, jnp.zeros(env.action_size))
-        if bool(state.info["note_end"]):
-            ends += 1
-            first_notes.append(int(state.info["song_note"]))
-        if t == 15 + 17:                                                  # the first song note is over
-            assert bool(state.info["note_end"]) and int(state.cursor.note) == 2
-    assert ends == 9 and first_notes == list(range(-1, 8)) and bool(state.done)
+    # the song played through with zero actions, step by step in the scripted player's program (the same reset)
+    steps = 15 + 8 * 18
+    info = ScriptedPlayer(env).rollout([0], np.zeros((1, steps, env.action_size), np.float32))
+    note_end, song_note, done = (np.asarray(info[k])[0] for k in ("note_end", "song_note", "done"))
+    assert song_note[note_end].tolist() == list(range(-1, 8))         # the count-in, then the 8 notes, once each
+    assert note_end[15 + 17] and song_note[15 + 17] == 0                # the first song note is over at its end
+    assert done[-1] and not done[:-1].any()                             # the song's end ends the episode
 
 
-@pytest.mark.parametrize("hand,obs,columns,hands",
-                         [("right", 2 * 16 * 13 + 35, 1, 1), ("duet", 2 * 32 * 13 + 70, 7, 2)])
-def test_right_and_duet_step_under_jit_and_vmap(hand, obs, columns, hands):
+def test_right_step_under_jit_and_vmap():
+    """(The duet's training step: tests/test_sync.py, inside the synchronizer's training iteration.)"""
+    hand, obs, columns, hands = "right", 2 * 16 * 13 + 35, 1, 1
     env = envs.make(hand, [chord_song()])
     state = jax.jit(jax.vmap(env.reset))(jax.random.split(jax.random.PRNGKey(0), N_ENVS))
     step = jax.jit(jax.vmap(env.step))

@@ -106,8 +106,8 @@ def test_discriminator_separates_reference_from_random_motion():
     # reference: smooth motions (a point moving on a circle of radius 10); fake: random jitter of the same size.
     # The gradient penalty on the sum of the 32 outputs bounds each output's slope near 1/32, so the toy data are
     # spread out enough for the mean output to separate by a visible margin.
-    real = 10 * np.stack([np.stack([np.sin(a + t), np.cos(a + t)], -1) for a in rng.uniform(0, 6, 256)])
-    fake = rng.uniform(-10, 10, (256, IM.FRAMES, 2))
+    real = 10 * np.stack([np.stack([np.sin(a + t), np.cos(a + t)], -1) for a in rng.uniform(0, 6, 128)])
+    fake = rng.uniform(-10, 10, (128, IM.FRAMES, 2))
     disc = N.Discriminator()
     params = disc.init(jax.random.PRNGKey(0), jnp.zeros((IM.FRAMES, 2)))
     opt = optax.adam(1e-3)
@@ -119,7 +119,7 @@ def test_discriminator_separates_reference_from_random_motion():
             disc.apply, params, jnp.asarray(real, jnp.float32), jnp.asarray(fake, jnp.float32), key)
         updates, state = opt.update(g, state)
         return optax.apply_updates(params, updates), state, loss
-    for i in range(150):
+    for i in range(100):
         params, state, loss = step(params, state, jax.random.PRNGKey(i))
     r_real = N.disc_reward(disc.apply(params, jnp.asarray(real, jnp.float32)))
     r_fake = N.disc_reward(disc.apply(params, jnp.asarray(fake, jnp.float32)))

@@ -523,13 +523,16 @@ def test_an_early_crossing_leaves_the_stroke_before_its_time():
 def test_the_count_in_gives_the_hand_time_to_reach_a_far_first_note():
     """`flight_of_the_bumblebee1` opens with fret 12 on string 1 in 5-frame notes (1/16 at 180 BPM). From the home pose
     (the index finger over fret 5) the planned hand moves about 0.15 m along the neck to press it: after the training
-    windows' 5-frame rest it arrives after the first two notes, after the evaluation's 15-frame count-in in time."""
+    windows' 5-frame rest it arrives after the first two notes, after the evaluation's 15-frame count-in in time
+    (the plan tracked in MuJoCo C, presses as the env detects them: `tracked_presses`)."""
     notes = [make_note("1/16", [f, -1, -1, -1, -1, -1]) for f in (12, 11, 10, 9, 10, 9, 8, 7)]
     timeline = TL.from_song(Song(tempo=180, notes=tuple(notes), title="bumblebee's opening"))
-    first = {}
+    held = {}
     for count_in in (5, envs.EnvConfig().count_in):
         config = dataclasses.replace(envs.EnvConfig(), count_in=count_in).evaluation()
         assert config.rest_frames == count_in
-        score = ScriptedPlayer(envs.make("left", [timeline], config)).play(0)["left"]
-        first[count_in] = score["per_note"][:2, 2].tolist()           # F1 of the first two notes
-    assert first == {5: [0.0, 0.0], 15: [1.0, 1.0]}, first
+        window = Notes.from_window(envs.make("left", [timeline], config).sample_window(jax.random.PRNGKey(0), 0))
+        assert window.onset[1] == count_in
+        press = tracked_presses(ScriptedLeft(), window)
+        held[count_in] = [strings_held(press, window.left, window.onset, i) for i in (1, 2)]   # the first two notes
+    assert held == {5: [0, 0], 15: [1, 1]}, held

@@ -2,6 +2,7 @@
 the duet env, exact resume, the export and the `dexguitar sync` / `eval` commands on a tiny song."""
 import json
 
+import chex
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -194,6 +195,17 @@ def test_sync_iteration_trains_only_the_synchronizer_and_resumes_exactly(sync_tr
     p0 = jax.device_get(start.params)
     first, metrics = chunk(start, data)
     assert all(np.isfinite(float(v)) for k, v in metrics.items() if not k.startswith("f1/"))
+    # the duet env's 4 states after the iteration's steps: both hands' observations, 7 reward columns
+    env = first.env
+    chex.assert_shape(env.obs, (4, 2 * 2 * 16 * 13 + 2 * 35))
+    chex.assert_shape(env.reward, (4, 7))
+    chex.assert_shape(env.privileged, (4, 6))
+    chex.assert_tree_all_finite((env.obs, env.reward))
+    assert t.env.layout.obs_size == 902 and t.env.layout.hands == 2 and t.env.layout.frame == 16 * 13
+    # a strum asks for contiguous strings: each note's target strings are one run
+    for row in np.asarray(env.cursor.window.pick).reshape(-1, 6):
+        on = np.flatnonzero(row)
+        assert len(on) == 0 or on[-1] - on[0] + 1 == len(on), row
     p1 = jax.device_get(first.params)
     diff = jax.tree.map(lambda a, b: float(np.abs(np.asarray(a) - b).max()), p1, p0)
     assert max(jax.tree.leaves(diff["policy"]["params"]["dz"])) > 0           # the synchronizer learns

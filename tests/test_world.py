@@ -90,9 +90,9 @@ def test_only_thumb_and_index_of_the_picking_hand_touch_each_other():
             assert not (m.geom_contype[a] & m.geom_conaffinity[b])
 
 
-@pytest.mark.parametrize("name", ["left", "right", "duet"])
-def test_four_envs_step_under_jit_and_vmap(name):
-    m = S.build_model(name)
+def test_four_envs_step_under_jit_and_vmap():
+    """The duet scene holds both hand models (the one-hand scenes step inside the envs, tests/test_envs.py)."""
+    m = S.build_model("duet")
     mx = mjx.put_model(m)
     d = mujoco.MjData(m)
     mujoco.mj_resetDataKeyframe(m, d, 0)
