@@ -126,15 +126,6 @@ def one_song_at_a_time(tmp_path, monkeypatch, params, spec, limit: str):
     return song, two, one
 
 
-def test_a_cpu_plays_one_hand_some_songs_at_a_time(tmp_path, monkeypatch):
-    """48 left-hand songs in one program stalled XLA's CPU run on a 2-core machine as the duet's five did, so a CPU
-    plays one hand `CPU_HAND_SONGS` songs at a time."""
-    from dexguitar.cli import POLICIES
-    params, meta = PO.load(POLICIES / "left_general")
-    song, two, _ = one_song_at_a_time(tmp_path, monkeypatch, params, PO.PolicySpec.from_meta(meta), "CPU_HAND_SONGS")
-    assert two[song.title]["summary"]["left"]["notes"] == 2          # the note and the chord that press a string
-
-
 def test_a_cpu_plays_the_duet_a_few_songs_at_a_time(tmp_path, monkeypatch):
     """Five or six songs in one duet program stalled XLA's CPU run on a 2-core machine, so a CPU plays the duet
     `CPU_DUET_SONGS` songs at a time. Here one at a time, with the shipped general pair: two songs take the
