@@ -24,6 +24,7 @@ from dexguitar.music import cursor as CU
 from dexguitar.music import timeline as TL
 from dexguitar.perform.evaluate import evaluate
 from test_scripted import MELODY, fast_lines, melody
+from test_sync import one_song_at_a_time
 
 
 @pytest.fixture(scope="module")
@@ -50,18 +51,12 @@ def test_zero_residual_plays_as_the_scripted_player(plans, monkeypatch):
     """Also: a CPU plays one hand `CPU_HAND_SONGS` songs at a time (48 left-hand songs in one program stalled XLA's
     CPU run on a 2-core machine). Here one at a time: two songs take the one-song program and each copy scores
     exactly as the song alone."""
-    from dexguitar.perform import evaluate as EV
     config = envs.EnvConfig().evaluation()
     scripted = ScriptedPlayer(envs.make("left", plans, config)).play(0)["left"]
     env = envs.make("left", plans, config)
     params, spec = zero_residual(env.env)
-    monkeypatch.setattr(EV, "CPU_HAND_SONGS", 1)
-    monkeypatch.setattr(EV, "_CACHE", {})
-    title = "scripted test melody"
-    two = evaluate(params, spec, [melody(), melody()])
-    played = evaluate(params, spec, [melody()])[title]
-    assert len(EV._CACHE) == 1                                  # a single program, of one song's shape
-    assert list(two) == [title, f"{title} (1)"] and two[title] == played == two[f"{title} (1)"]
+    _, one = one_song_at_a_time(monkeypatch, params, spec, "CPU_HAND_SONGS", melody())
+    played = one["scripted test melody"]
     assert played["summary"]["left"]["notes"] == sum(fret > 0 for _, fret in MELODY)     # open strings: no press
     assert played["summary"]["left"]["f1"] == pytest.approx(scripted["f1"], abs=1e-6)
     assert scripted["f1"] >= 0.95

@@ -109,13 +109,10 @@ def test_a_scaled_left_hand_acts_at_its_scale_alone_and_in_the_duet(pair, tmp_pa
         check_init(tmp_path / "scaled", "left", 9)
 
 
-def one_song_at_a_time(tmp_path, monkeypatch, params, spec, limit: str):
-    """The tiny song evaluated twice in one call and once alone, with the CPU's songs per program (`limit`) set to 1:
-    (song, two, one). Both calls take the one-song program and each copy scores exactly as the song alone."""
-    from dexguitar.music import load_song
+def one_song_at_a_time(monkeypatch, params, spec, limit: str, song):
+    """`song` evaluated twice in one call and once alone, with the CPU's songs per program (`limit`) set to 1:
+    (two, one). Both calls take the one-song program and each copy scores exactly as the song alone."""
     from dexguitar.perform import evaluate as EV
-    (tmp_path / "tiny.txt").write_text(TINY_SONG)
-    song = load_song(tmp_path / "tiny.txt")
     monkeypatch.setattr(EV, limit, 1)
     monkeypatch.setattr(EV, "_CACHE", {})
     two = EV.evaluate(params, spec, [song, song])
@@ -123,7 +120,7 @@ def one_song_at_a_time(tmp_path, monkeypatch, params, spec, limit: str):
     assert len(EV._CACHE) == 1                                  # a single program, of one song's shape
     assert list(two) == [song.title, f"{song.title} (1)"] and list(one) == [song.title]
     assert two[song.title] == one[song.title] == two[f"{song.title} (1)"]
-    return song, two, one
+    return two, one
 
 
 def test_a_cpu_plays_the_duet_a_few_songs_at_a_time(tmp_path, monkeypatch):
@@ -136,7 +133,9 @@ def test_a_cpu_plays_the_duet_a_few_songs_at_a_time(tmp_path, monkeypatch):
     from dexguitar.perform import evaluate as EV
     from dexguitar.perform.play import pair as general_pair
     params, spec = general_pair(POLICIES / "left_general", POLICIES / "right_mixed")
-    song, two, one = one_song_at_a_time(tmp_path, monkeypatch, params, spec, "CPU_DUET_SONGS")
+    (tmp_path / "tiny.txt").write_text(TINY_SONG)
+    song = load_song(tmp_path / "tiny.txt")
+    two, one = one_song_at_a_time(monkeypatch, params, spec, "CPU_DUET_SONGS", song)
     assert two[song.title]["summary"]["both"]["notes"] == 3                  # two notes and a chord, all judged
     # songs not planned yet are planned together, in one pool of planner processes, before the first chunk plays
     (tmp_path / "other.txt").write_text(TINY_SONG.replace("B|----1", "B|----3"))
