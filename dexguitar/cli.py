@@ -42,6 +42,7 @@ from dexguitar.music import library, load_song, procedural
 from dexguitar.music import timeline as TL
 from dexguitar.music.tab_json import write_json_tab
 from dexguitar.perform import pipeline, plots
+from dexguitar.perform import motion_quality as MQ
 from dexguitar.perform import play as PL
 from dexguitar.perform.evaluate import dumps, evaluate, evaluate_synchronizer
 from dexguitar.shipped import policies_dir
@@ -295,6 +296,13 @@ def _print_results(results: dict, label: str = "") -> None:
             for h in hands))
         for chord, f1 in sorted(s["chords"].items(), key=lambda kv: kv[1]):
             print(f"    chord {chord:>14s}  F1 {f1:.3f}")
+        if "motion" in s:
+            print("    " + _motion_line(s["motion"]))
+
+
+def _motion_line(m: dict) -> str:
+    return (f"left-hand motion: jerk {m['jerk']:.4g} rad/s^3, energy {m['energy']:.4g} (rad/s)^2, "
+            f"human distance {m['human_distance']:.4f} rad")
 
 
 def _eval(args) -> int:
@@ -313,22 +321,40 @@ def _eval(args) -> int:
         raise UserError("eval: give --song and/or --procedural N")
     keep = (lambda r: r) if args.notes else (lambda r: {k: v["summary"] for k, v in r.items()})
     env_config = E.EnvConfig(physics=args.physics)
+    human = None
+    if args.human:       # the human's finger poses first: a bad file fails before the rollout
+        if spec.hand == "right":
+            raise UserError("eval --human: the motion line is the left hand's; this policy plays the right hand")
+        with P.stdout_to_stderr():
+            human = MQ.human_poses(args.human)
+    record = human is not None
     if spec.kind == "synchronizer" and args.ckpt:   # before and after synchronization
         with P.stdout_to_stderr():        # stdout: the results alone
-            staged = evaluate_synchronizer(params, spec, songs, env_config)
+            staged = evaluate_synchronizer(params, spec, songs, env_config, record=record)
+        means = {stage: MQ.add_to_results(r, human) for stage, r in staged.items()} if record else {}
         if args.json:
-            print(dumps({stage: keep(r) for stage, r in staged.items()}, indent=2))
+            print(dumps({stage: _with_mean(keep(r), means.get(stage)) for stage, r in staged.items()}, indent=2))
             return 0
         for stage, results in staged.items():
             _print_results(results, f"[{stage} synchronization] ")
+            if stage in means:
+                print(f"[{stage} synchronization] mean {_motion_line(means[stage])}")
         return 0
     with P.stdout_to_stderr():
-        results = evaluate(params, spec, songs, env_config)
+        results = evaluate(params, spec, songs, env_config, record=record)
+    mean = MQ.add_to_results(results, human) if record else None
     if args.json:
-        print(dumps(keep(results), indent=2))
+        print(dumps(_with_mean(keep(results), mean), indent=2))
         return 0
     _print_results(results)
+    if mean is not None:
+        print(f"mean over {len(results)} song{'s' * (len(results) != 1)}: {_motion_line(mean)}")
     return 0
+
+
+def _with_mean(results: dict, mean: dict | None) -> dict:
+    """`eval --json` output: the songs, and with --human the mean motion line as "motion_mean"."""
+    return results if mean is None else {**results, "motion_mean": mean}
 
 
 # The general pair: both hands on their IK planners (zero residuals). `sync` takes `right_mixed`, a trained
@@ -529,6 +555,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="procedural material, as for train (default: the hand's)")
     p.add_argument("--json", action="store_true")
     p.add_argument("--notes", action="store_true", help="with --json: include the per-note rows")
+    p.add_argument("--human", nargs="+", metavar="CSV_OR_MOTION",
+                   help="add the left hand's motion line per song and on average (finger jerk, energy, distance "
+                        "to the nearest human pose; docs/motion_quality.md) against these motion-capture CSVs "
+                        "(left hand retargeted, cached) or left-hand motion files")
     p.add_argument("--physics", default="auto", choices=E.PHYSICS,
                    help="MJX's implementation (auto: Warp on a GPU where warp-lang is installed, else JAX)")
     p.set_defaults(func=_eval)

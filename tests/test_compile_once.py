@@ -159,7 +159,10 @@ def test_a_chunk_file_loads_in_a_new_process_without_tracing(tmp_path, monkeypat
     assert how == "compiled" and not list(tmp_path.glob("chunk-*.exe"))
 
 
-def test_a_second_evaluation_compiles_nothing(compiles):
+def test_a_second_evaluation_compiles_nothing_and_a_learned_hand_plans_nothing(compiles, monkeypatch):
+    """A policy that is not a residual (`left_learned`'s kind) acts from its network alone: nothing of the planner
+    runs while it plays (every way into the planner raises)."""
+    from dexguitar import planner
     from dexguitar.learn import networks as N
     from dexguitar.learn import policy as PO
     from dexguitar.music import library
@@ -169,6 +172,14 @@ def test_a_second_evaluation_compiles_nothing(compiles):
     params = {"policy": N.init_params(N.Policy(27), jax.random.PRNGKey(0), (2, 208), (35,)),
               "obs_norm": N.normalizer_init(208)}
     song = library.load("open_strings")
+
+    def planning(*args, **kwargs):
+        raise AssertionError("the planner ran")
+    for module in (planner, planner.plans):
+        for name in ("attach", "plan_songs"):
+            monkeypatch.setattr(module, name, planning)
+    for name in ("plan_notes", "plan_all", "_planner"):
+        monkeypatch.setattr(planner.plans, name, planning)
     start = compiles()
     evaluate(params, spec, [song])
     other = jax.block_until_ready(jax.tree.map(lambda x: x + 0.01, params))   # other weights, the same program

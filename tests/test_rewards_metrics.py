@@ -312,3 +312,54 @@ def test_hold_completions_fire_once_when_the_both_hands_verdict_becomes_right():
     assert fired == []
     assert _completions(goal, [on] * 9, [idle] * 9, [False] * 6, 9, tally)[0] == [(1, 1)]
     assert _completions(goal, [on] + [off] * 8, [idle] * 9, [False] * 6, 9, tally)[0] == []
+
+
+# ----------------------------------------------------------------------------------------------- r_contact (Eq. 15)
+
+# joint offsets from the home pose (rad, right-hand convention) and whether MuJoCo C's collision detection then reports
+# a thumb3-index contact: home leaves a 0.98 mm gap to index3; thumb3 flexed 0.3 sinks it ~1.9 mm into index3; thumb2
+# flexed 0.3 into both index2 and index3; thumb1_z opened 0.3 takes it ~3 cm away
+GRIP_POSES = {"home": ({}, False), "thumb3 bent in": ({"thumb3": -0.3}, True),
+              "thumb2 bent in": ({"thumb2": -0.3}, True), "thumb opened": ({"thumb1_z": 0.3}, False)}
+
+
+@pytest.mark.parametrize("scene, mirror", [("right", False), ("duet", True)])
+def test_thumb_index_contact_agrees_with_mujoco_collision_detection(scene, mirror):
+    import mujoco
+
+    from dexguitar import mjx as quiet_mjx
+    from dexguitar.envs import EnvConfig
+    from dexguitar.envs.core import CONTACT_TOL
+    from dexguitar.envs.duet import DuetEnv
+    from dexguitar.envs.right import RightEnv
+    from dexguitar.music import timeline as TL
+    from dexguitar.music.song import Song, make_note
+    from dexguitar.world import hands as H
+
+    mjx = quiet_mjx()
+    song = TL.from_song(Song(100, (make_note("1/4", [-1, 0, -1, -1, -1, -1]),), "one"))
+    env = (RightEnv if scene == "right" else DuetEnv)(song, EnvConfig(physics="jax", mirror=mirror))
+    m, d = env.model, mujoco.MjData(env.model)
+    thumb, index2, index3 = (int(g) for g in env._grip_geoms)
+    assert [m.geom(g).name for g in (thumb, index2, index3)] == ["rh_thumb3", "rh_index2", "rh_index3"]
+    names = [j.name for j in H.joints("right")]
+    qadr = np.asarray(env.hands[env.roles.index("right")].qpos)
+    for pose, (offsets, touching) in GRIP_POSES.items():
+        delta = np.zeros(len(names))
+        for joint, v in offsets.items():
+            delta[names.index(joint)] = v
+        if mirror:
+            delta = H.mirror_qpos(delta, side_from="right")
+        d.qpos[:] = m.key_qpos[0]
+        d.qpos[qadr] += delta
+        mujoco.mj_forward(m, d)
+        # the oracle: MuJoCo C's own collision detection, and its own geom distances
+        c_contact = any({int(c.geom1), int(c.geom2)} in ({thumb, index2}, {thumb, index3})
+                        for c in d.contact[:d.ncon])
+        c_gaps = [mujoco.mj_geomDistance(m, d, thumb, g, 0.1, None) for g in (index2, index3)]
+        assert c_contact == touching, pose                                 # the pose does what it says
+        data = mjx.put_data(m, d)
+        gaps = np.asarray(env.thumb_index_gaps(data))
+        np.testing.assert_allclose(gaps, c_gaps, atol=2e-5, err_msg=pose)
+        assert min(c_gaps) < -5e-4 if touching else min(c_gaps) > 3 * CONTACT_TOL, pose  # clear of the tolerance
+        assert float(env.thumb_index_contact(data)) == float(touching), pose

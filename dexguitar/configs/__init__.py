@@ -17,6 +17,7 @@ overrides a field of CONFIG, `--set env.KEY=VALUE` one of ENV (`load_config`).
   left_general           the general left hand by PPO alone, the paper's recipe (about 8e8 samples)
   left_general_residual  left_residual on the general procedural material
   left_general_anchored  the general left hand held to the planner by a prior (`make train-left-general`)
+  left_learned           the learned left hand: PPO with the planner's labels of its own states (DAgger)
 
 Any other recipe is a .py file defining CONFIG (and optionally ENV), given as `--config PATH`.
 """

@@ -17,8 +17,8 @@ ENVS = {"left": LeftEnv, "right": RightEnv, "duet": DuetEnv}
 def make(hand: str, songs, config: EnvConfig | None = None, **overrides):
     """The env for `hand` ("left", "right" or "duet") over a song batch (a `Timeline` or a list of them or of
     `Song`s), with its episode logic: training windows chained and auto-reset, or (`config.sequential`) whole songs
-    played through. The planner's plans that the config's feedforwards ask for are made (or read from their
-    cache) here, unless the songs carry them already."""
+    played through. The planner's plans that the config's feedforwards or teacher ask for are made (or read from
+    their cache) here, unless the songs carry them already."""
     if hand not in ENVS:
         raise ValueError(f"unknown hand {hand!r}; expected one of {', '.join(ENVS)}")
     config = dataclasses.replace(config or EnvConfig(episode_frames=1200 if hand == "duet" else 600), **overrides)
@@ -27,7 +27,12 @@ def make(hand: str, songs, config: EnvConfig | None = None, **overrides):
     if config.right_feedforward and "right" not in ENVS[hand].roles:
         raise ValueError(f"EnvConfig.right_feedforward is the right hand's planned motion; the {hand} env has no "
                          "right hand")
-    env = ENVS[hand](planner.prepare(songs, config), config)
+    if config.teacher and "left" not in ENVS[hand].roles:
+        raise ValueError(f"EnvConfig.teacher labels the left hand from its planner; the {hand} env has no left hand")
+    songs = planner.prepare(songs, config)
+    if config.teacher and songs.plan is None:           # the left plans, as labels only
+        songs = planner.attach(songs, config.rest_frames, config.mirror)
+    env = ENVS[hand](songs, config)
     return PlayThrough(env) if config.sequential else AutoReset(ChainWindows(env))
 
 

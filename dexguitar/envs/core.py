@@ -31,7 +31,7 @@ from dexguitar.world import detect
 from dexguitar.world import hands as H
 from dexguitar.world import physics as P
 from dexguitar.world import scene as S
-from dexguitar.world.geometry import positive_w, quat_conj, quat_mul, quat_to_mat
+from dexguitar.world.geometry import positive_w, quat_conj, quat_mul, quat_to_mat, segment_distance
 from dexguitar.world.guitar import N_STRINGS, Guitar
 from dexguitar.world.physics import control_step, exact
 
@@ -39,6 +39,14 @@ mjx = _quiet_mjx()
 
 HISTORY = 2                    # frames of link states in the observation (reference §4)
 LINK_FEATURES = 13             # position 3, quaternion 4, linear velocity 3, angular velocity 3
+# r_contact of Eq. 15: the picking hand's thumb touches its index finger where their capsules' surfaces are at most
+# this far apart (m). The reference pays it for net contact forces (PhysX, contact offset 0.1 mm a shape), i.e. on
+# touching; 0.2 mm, the gap at which PhysX makes that contact, leaves room for float32 rounding and stays well below
+# the home pose's gap (0.98 mm thumb3 to index3), which does not touch (MuJoCo reports no contact there either).
+CONTACT_TOL = 2e-4
+# the picking hand's bodies (hand-prefixed) whose capsules hold the pick: the thumb's last phalanx against the index
+# finger's middle and last ones (the scene's only self-contact pairs, `world.hands.hand_xml`)
+GRIP_BODIES = ("thumb3", "index2", "index3")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -68,6 +76,10 @@ class EnvConfig:
     mirror: bool = False                 # the left-handed player's scene
     feedforward: bool = False            # the left action is a residual on the planner's (`planner.plans`)
     right_feedforward: bool = False      # the right action likewise, on the right planner's
+    teacher: bool = False                # the left planner's action for the hand's state in info["teacher"], not
+                                         # added to the action: a learned hand's labels (`TrainConfig.teacher_weight`)
+    teacher_gain: float = 1.0            # the label's pull back to the plan: planned action + gain x (planned joint
+                                         # position - joint position) / half range
     margin_reward: float = 0.0           # not in the paper: added to each string's column times its press margin
                                          # (`rewards.margin_reward`), a smooth measure of how robustly it plays
     physics: str = "auto"                # MJX's "jax" or "warp" implementation; "auto": Warp on a GPU where warp-lang
@@ -148,6 +160,16 @@ class Task(NamedTuple):
 
 # ---------------------------------------------------------------------------------------------------- the env
 
+def _capsule(model: mujoco.MjModel, body: str) -> int:
+    """The id of the one capsule geom of the body named `body`."""
+    b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, body)
+    found = [g for g in range(model.ngeom)
+             if b >= 0 and model.geom_bodyid[g] == b and model.geom_type[g] == mujoco.mjtGeom.mjGEOM_CAPSULE]
+    if len(found) != 1:
+        raise ValueError(f"body {body!r} has {len(found)} capsule geoms; expected one")
+    return found[0]
+
+
 class GuitarEnv:
     """One env over a scene with the given hand roles; subclasses define goals, rewards and their weights."""
 
@@ -181,6 +203,10 @@ class GuitarEnv:
         self.hands = tuple(S.hand_index(self.model, r) for r in self.roles)
         self._jnt_lo = jnp.asarray(self.model.jnt_range[:, 0], jnp.float32)
         self._jnt_hi = jnp.asarray(self.model.jnt_range[:, 1], jnp.float32)
+        if "right" in self.roles:
+            grip = [_capsule(self.model, S.PREFIX["right"] + b) for b in GRIP_BODIES]
+            self._grip_geoms = jnp.asarray(grip, jnp.int32)
+            self._grip_size = jnp.asarray(self.model.geom_size[grip, :2], jnp.float32)     # (3, 2) radius, half-length
 
     def bind(self, songs: TL.Timeline) -> "GuitarEnv":
         """This env over other songs of the same capacities (e.g. traced arguments of a jitted function)."""
@@ -250,12 +276,24 @@ class GuitarEnv:
     def pick_point(self, data):
         return self.to_guitar(data.site_xpos[self.hands[self.roles.index("right")].pick])
 
+    def thumb_index_gaps(self, data):
+        """(2,) m: the surface distance of the picking hand's thumb3 capsule to its index2 and index3 capsules
+        (segment-segment distance of their axes minus both radii; negative where they overlap), from `geom_xpos` and
+        `geom_xmat`, which both MJX implementations fill in kinematics (no collision detection needed)."""
+        g, size = self._grip_geoms, self._grip_size
+        half = data.geom_xmat[g].reshape(-1, 3, 3)[:, :, 2] * size[:, 1:]    # capsule axis: the geom frame's z
+        a, b = data.geom_xpos[g] - half, data.geom_xpos[g] + half
+        d2, _, _ = segment_distance(a[0], b[0], a[1:], b[1:])
+        return jnp.sqrt(jnp.maximum(d2, 1e-12)) - size[0, 0] - size[1:, 0]
+
     def thumb_index_contact(self, data):
-        """r_contact of Eq. 15 (the thumb on the index finger, holding the pick): 0, as in the rewards every shipped
-        right hand was trained with, whose contact slots were looked up in a Data before any collision and so were
-        none. Measuring it (the thumb3-index2/3 capsule distance from `geom_xpos`, `geom_xmat`, which both
-        implementations provide) changes the right hand's reward."""
-        return jnp.float32(0.0)
+        """r_contact of Eq. 15: 1 where the thumb touches the index finger to hold the pick, else 0 (the paper:
+        "r_contact = 1 if the thumb and index contact with each other correctly to hold the pick or 0 otherwise").
+        Touching: thumb3's capsule within `CONTACT_TOL` (0.2 mm) of index2's or index3's (`thumb_index_gaps`). The
+        reference (env.py:2028-2032) pays it for any net contact force on thumb3 and on index2 or index3, from
+        whatever touches them; here it is the two fingers' own contact, as the paper says. The shipped right hands
+        were trained with 0 here (their contact slots were looked up in a Data before any collision)."""
+        return jnp.any(self.thumb_index_gaps(data) <= CONTACT_TOL).astype(jnp.float32)
 
     # ------------------------------------------------------------------------ goals
     def hand_goal(self, role: str, cursor: CU.Cursor, picking: Picking):
@@ -300,9 +338,12 @@ class GuitarEnv:
 
     def empty_info(self):
         z = jnp.zeros(6, jnp.float32)
-        return {"press": jnp.zeros(N_STRINGS, jnp.int32), "picks": jnp.zeros(N_STRINGS, bool),
+        info = {"press": jnp.zeros(N_STRINGS, jnp.int32), "picks": jnp.zeros(N_STRINGS, bool),
                 "note_end": jnp.bool_(False), "song": jnp.int32(0), "song_note": jnp.int32(0),
                 "nonfinite": jnp.bool_(False), "left": z, "right": z, "both": z, "both_now": z}
+        if self.config.teacher:
+            info["teacher"] = jnp.zeros(H.N_DOF, jnp.float32)
+        return info
 
     def action_to_ctrl(self, action):
         """PD targets: a = 0 holds the home pose, a = +-1 moves a joint by half its range, clipped to the range.
@@ -338,6 +379,8 @@ class GuitarEnv:
         info.update(press=task.press, picks=task.picks, note_end=note_end & ~state.cursor.over,
                     song=state.cursor.window.song, song_note=state.cursor.window.first + state.cursor.note - 1,
                     nonfinite=nonfinite)
+        if cfg.teacher:
+            info["teacher"] = self.teacher(state)
         scores, fresh = scoring.close(tally, dur, goal_left, targets if self.picks else None)
         for hand, value in scores.items():
             info[hand] = jnp.where(info["note_end"], value, 0.0)
@@ -357,25 +400,41 @@ class GuitarEnv:
 
     @property
     def plans(self) -> dict:
-        """{role: `Plan`} of the hands that act on top of a planner's feedforward (the songs' plans of this env's
-        roles)."""
-        found = {"left": self.songs.plan, "right": self.songs.plan_right}
+        """{role: `Plan`} of the hands that act on top of a planner's feedforward or learn from its labels (the
+        songs' plans of those roles)."""
+        cfg = self.config
+        found = {"left": self.songs.plan if cfg.feedforward or cfg.teacher else None,
+                 "right": self.songs.plan_right if cfg.right_feedforward else None}
         return {r: found[r] for r in self.roles if found[r] is not None}
 
     @property
     def planned(self) -> bool:
-        """Does a hand act on top of a planner's feedforward?"""
+        """Does a hand play along a plan (a feedforward, or a teacher's labels)? Its windows start in the planned
+        state and end their episodes, so that the plan always belongs to the notes being played."""
         return bool(self.plans)
 
     def feedforward(self, cursor: CU.Cursor):
         """(action_size,) the planners' actions of the cursor's song frame in their hands' slices; zeros where a
-        hand has no plan."""
+        hand has no feedforward."""
         out, song = jnp.zeros(self.action_size), cursor.window.song
         for role, plan in self.plans.items():
+            if role == "left" and not self.config.feedforward:       # a teacher's plan only labels
+                continue
             ff = plan.action[song, jnp.clip(CU.song_frame(cursor), 0, plan.frames[song] - 1)]
             i = self.roles.index(role) * H.N_DOF
             out = out.at[i:i + H.N_DOF].set(ff)
         return out
+
+    def teacher(self, state: State):
+        """(27,) the left planner's action for this state: the planned action of the song frame plus the PD target
+        offset that pulls the hand back to the planned pose (`EnvConfig.teacher_gain`). The plan's PD targets alone
+        already pull toward the plan at the PD's own rate; the gain stiffens that pull where the hand strayed.
+        DAgger's expert: it labels any state a student visits, not only the planned ones."""
+        plan, song, i = self.plans["left"], state.cursor.window.song, self.roles.index("left")
+        f = jnp.clip(CU.song_frame(state.cursor), 0, plan.frames[song] - 1)
+        q = state.body.data.qpos[jnp.asarray(self.hands[i].qpos)]
+        half = self._ctrl_half[i * H.N_DOF:(i + 1) * H.N_DOF]
+        return jnp.clip(plan.action[song, f] + self.config.teacher_gain * (plan.qpos[song, f] - q) / half, -1.0, 1.0)
 
     @property
     def picks(self) -> bool:

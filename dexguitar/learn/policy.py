@@ -58,7 +58,8 @@ class PolicySpec:
 
     def to_meta(self) -> dict:
         meta = {"kind": self.kind, "hand": self.hand, "action_size": self.action_size,
-                "layout": self.layout.to_dict(), "obs_size": self.layout.obs_size, "goal_size": self.layout.goal_size}
+                "layout": self.layout.to_dict(), "obs_size": self.layout.obs_size, "goal_size": self.layout.goal_size,
+                "planner_at_run_time": bool(self.feedforward or self.right_feedforward)}
         if self.feedforward:            # the planner's version number: older releases read it
             meta["feedforward"] = PLANNER_VERSION
         if self.scale != 1.0:

@@ -61,6 +61,10 @@ class TrainConfig:
     kl_target: float = 0.0            # > 0: the actor's learning rate adapts to hold this KL per minibatch step
     action_scale: float = 1.0         # the policy's action times this (`networks.Policy.scale`; 1: the paper's)
     prior_kl: float = 0.0             # > 0: weight of KL(pi || N(0, std)), pulling the mean to the zero action
+    teacher_weight: float = 0.0       # > 0: the actor's loss adds this x the negative log-likelihood, per action
+                                      # number, of the planner's label of each visited state (`EnvConfig.teacher`):
+                                      # DAgger on the student's own states, beside PPO (not in the paper)
+    teacher_fade: int = 0             # iterations over which teacher_weight falls linearly to 0 (0: it stays)
     seed: int = 42
 
     @property
@@ -79,6 +83,9 @@ class TrainConfig:
             raise ValueError(f"TrainConfig.kl_target must be at least 0, got {self.kl_target}")
         if self.prior_kl < 0:
             raise ValueError(f"TrainConfig.prior_kl must be at least 0, got {self.prior_kl}")
+        if self.teacher_weight < 0 or self.teacher_fade < 0:
+            raise ValueError(f"TrainConfig.teacher_weight and teacher_fade must be at least 0, got "
+                             f"{self.teacher_weight} and {self.teacher_fade}")
         if not self.action_scale > 0:
             raise ValueError(f"TrainConfig.action_scale must be above 0, got {self.action_scale}")
         if self.minibatch > self.batch:
@@ -154,6 +161,9 @@ class Trainer:
         if not isinstance(songs, TL.Timeline):
             songs = TL.batch(list(songs))
         env_config = env_config or E.EnvConfig(episode_frames=1200 if config.hand == "duet" else 600)  # envs.make's
+        if config.teacher_weight and not env_config.teacher:
+            raise ValueError("TrainConfig.teacher_weight learns from the planner's labels: the env needs "
+                             "EnvConfig(teacher=True)")
         self.env = E.make(config.hand, songs, env_config.sized(config.num_envs, devices or len(jax.devices())))
         self.layout = self.env.layout
         self.spec = self.make_spec()
@@ -270,6 +280,8 @@ class Trainer:
                        reward=nxt.reward, done=nxt.done, terminated=nxt.terminated,
                        link_hist=nxt.body.link_hist, note_end=nxt.info["note_end"], nonfinite=nxt.info["nonfinite"],
                        **{f"score_{h}": nxt.info[h] for h in ("left", "right", "both")})
+            if self.config.teacher_weight:
+                out["teacher"] = nxt.info["teacher"]          # the label of the state the action was taken in
             return nxt, out
         return jax.lax.scan(one, ts.env, jax.random.split(key, self.config.horizon))
 
@@ -334,6 +346,8 @@ class Trainer:
         n = batch["obs"].shape[0]
         n_mb = max(n // cfg.minibatch, 1)
         obs_norm, frozen = ts.obs_norm, ts.params.get("frozen")
+        teacher_weight = cfg.teacher_weight * (
+            jnp.clip(1.0 - ts.iteration / cfg.teacher_fade, 0.0, 1.0) if cfg.teacher_fade else 1.0)
 
         def loss_fn(params, mb):
             actor = self.actor_params(dict(params, **({"frozen": frozen} if frozen is not None else {})), obs_norm)
@@ -348,6 +362,10 @@ class Trainer:
             if cfg.prior_kl:
                 log["prior_kl"] = ppo.prior_kl(mu, log_std)
                 loss = loss + cfg.prior_kl * log["prior_kl"]
+            if cfg.teacher_weight:
+                log["teacher_nll"] = -jnp.mean(N.gaussian_log_prob(mu, log_std, mb["teacher"])) / mu.shape[-1]
+                log["teacher_rms"] = jnp.sqrt(jnp.mean((mu - mb["teacher"]) ** 2))
+                loss = loss + teacher_weight * log["teacher_nll"]
             return loss, log
 
         def epoch(carry, k):
@@ -418,6 +436,8 @@ class Trainer:
         batch = {"obs": flat(traj["obs"]), "privileged": flat(traj["privileged"]), "action": flat(traj["action"]),
                  "logp": flat(traj["logp"]), "adv": flat(weighted),
                  "target": flat(ppo.popart_normalize(popart, returns))}
+        if cfg.teacher_weight:
+            batch["teacher"] = flat(traj["teacher"])
         ts_mid = ts.replace(obs_norm=obs_norm, params=dict(ts.params, critic=critic))
         params, opt, ppo_log = self.ppo_update(ts_mid, batch, k_ppo, split)
 

@@ -23,6 +23,7 @@ from dexguitar.learn.policy import PolicySpec, act_fn, unsynchronized
 from dexguitar.learn.tracing import fresh_trace
 from dexguitar import planner
 from dexguitar.music import timeline as TL
+from dexguitar.world import hands as H
 from dexguitar.world import physics as P
 
 HANDS = {"left": ("left",), "right": ("right",), "duet": ("left", "right", "both")}
@@ -31,12 +32,15 @@ HANDS = {"left": ("left",), "right": ("right",), "duet": ("left", "right", "both
 # 48 songs (`--procedural 48`, twice), never with 16 or 32.
 CPU_DUET_SONGS = 4
 CPU_HAND_SONGS = 16
+RECORD_ROUND = 1024         # `evaluate(record=True)` records a multiple of this many steps (one program per multiple)
 
 
-def rollout_notes(env, act, params, song_index, key, hands):
+def rollout_notes(env, act, params, song_index, key, hands, record: int = 0, joints=()):
     """Play songs `song_index` (n,) of the env's batch from their start, one env each (keys `key` (n,)), with
     `act(params, obs)` until every one is over. Returns (scores (n, W, hands, 6): [precision, recall, f1, tp,
-    predicted, targets] of each window row, ended (n, W): the row was played to its end).
+    predicted, targets] of each window row, ended (n, W): the row was played to its end). With `record` > 0, also
+    (qpos (n, record, len(joints)): the joint values `joints` (qpos addresses) after each of the first `record`
+    steps, steps (n,): the steps each song was played), for the motion line (`motion_quality`).
 
     The loop is outside the vmap, not a vmapped loop (which is the same program: a song that is over keeps its
     state): batching a `while_loop` re-batches its body until the carry's batching settles, half of the trace."""
@@ -59,8 +63,20 @@ def rollout_notes(env, act, params, song_index, key, hands):
     state = jax.vmap(env.reset)(key, song_index)
     n = song_index.shape[0]
     carry = (state, jnp.zeros((n, W, len(hands), 6), jnp.float32), jnp.zeros((n, W), bool))
-    _, scores, ended = jax.lax.while_loop(lambda c: jnp.any(~c[0].done), body, carry)
-    return scores, ended
+    if not record:
+        _, scores, ended = jax.lax.while_loop(lambda c: jnp.any(~c[0].done), body, carry)
+        return scores, ended
+    joints = jnp.asarray(joints)
+
+    def recording(c):       # every song plays from step 0 and stays over once over: its steps are a prefix
+        playing = ~c[0][0].done
+        played = body(c[0])
+        i = jnp.minimum(c[3], record - 1)
+        q = jnp.where((playing & (c[3] < record))[:, None], played[0].body.data.qpos[:, joints], c[1][:, i])
+        return played, c[1].at[:, i].set(q), c[2] + playing, c[3] + 1
+    rec = (carry, jnp.zeros((n, record, joints.shape[0]), jnp.float32), jnp.zeros(n, jnp.int32), jnp.int32(0))
+    (_, scores, ended), qpos, steps, _ = jax.lax.while_loop(lambda c: jnp.any(~c[0][0].done), recording, rec)
+    return scores, ended, qpos, steps
 
 
 def rollout_song(env, act, song_index: int, frames: int, key=None, xs=None):
@@ -109,22 +125,27 @@ _CACHE: dict = {}
 COMPILE_SECONDS: dict = {}        # how long each cached program took to compile (or to load from the disk cache)
 
 
-def _compiled(hand, env_config, spec, params, songs):
+def _compiled(hand, env_config, spec, params, songs, record: int = 0):
     """The compiled play(params, songs) -> (scores, ended, note frames): one per hand, env config, policy spec and
-    song batch capacity, kept for the life of the process."""
+    song batch capacity, kept for the life of the process. `record` > 0 (a program of its own): also the fretting
+    hand's 27 joint values of the first `record` steps and each song's steps (`rollout_notes`)."""
     key = (hand, env_config, spec, str(jax.tree.map(lambda x: (x.shape, str(x.dtype)), songs)))
+    key = key + (("record", record),) if record else key
     if key not in _CACHE:
         env = E.make(hand, songs, env_config)
         act = act_fn(spec, deterministic=True)
+        if record and "left" not in env.roles:
+            raise ValueError(f"a {hand} evaluation has no fretting hand to record")
+        joints = env.hands[env.roles.index("left")].qpos if record else ()
 
         def play(params, songs_):
             bound = env.bind(songs_)
             n = songs_.n_notes.shape[0]
             keys = jax.random.split(jax.random.PRNGKey(0), n)
-            scores, ended = rollout_notes(bound, act, params, jnp.arange(n), keys, HANDS[hand])
+            out = rollout_notes(bound, act, params, jnp.arange(n), keys, HANDS[hand], record, joints)
             # each song's note lengths, as the env played them (in the program: no small programs on the host)
             dur = jax.vmap(lambda i: bound.sample_window(jax.random.PRNGKey(0), i).dur)(jnp.arange(n))
-            return scores, ended, dur
+            return out[:2] + (dur,) + out[2:]
         t0 = time.perf_counter()
         fresh_trace()              # the same program whatever the process traced before (`learn.tracing`)
         _CACHE[key] = jax.jit(play).lower(params, songs).compile()
@@ -199,10 +220,12 @@ def dumps(obj, **kwargs) -> str:
     return json.dumps(finite(obj), allow_nan=False, **kwargs)
 
 
-def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str | None = None) -> dict:
+def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str | None = None,
+             record: bool = False) -> dict:
     """F1 of a policy on each song, all songs played at once (one env each; on a CPU `CPU_DUET_SONGS` or
     `CPU_HAND_SONGS` at a time). `hand` defaults to the policy's (a synchronizer plays the duet). Returns
-    {title: {"summary", "notes"}}."""
+    {title: {"summary", "notes"}}; `record`: also "qpos", the fretting hand's (frames, 27) joint values at the
+    control rate in the left-hand model's order (`motion_quality`)."""
     hand = hand or spec.hand
     cfg = spec.env_config(env_config or E.EnvConfig()).evaluation()
     params = jax.tree.map(jnp.asarray, params)
@@ -221,18 +244,27 @@ def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str |
     for start in range(0, len(songs), size):
         part = songs[start:start + size]
         batch = planner.prepare(TL.batch(timelines[start:start + size]), cfg)
-        play = _compiled(hand, cfg, spec, params, batch)
-        scores, ended, dur = jax.device_get(play(params, batch))
+        # a song plays its frames after the count-in; rounded up so song sets of about one length share a program
+        frames = max(int(t.n_frames) for t in timelines[start:start + size]) + cfg.rest_frames + 1
+        record_steps = -(-frames // RECORD_ROUND) * RECORD_ROUND if record else 0
+        play = _compiled(hand, cfg, spec, params, batch, record_steps)
+        scores, ended, dur, *recorded = jax.device_get(play(params, batch))
         for j, song in enumerate(part):
             i = start + j
             rows = note_rows(scores[j], ended[j], np.asarray(dur[j]), song, HANDS[hand])
             title = song.title or f"song{i}"
-            results[title if title not in results else f"{title} ({i})"] = {"summary": summarize(rows, HANDS[hand]),
-                                                                            "notes": rows}
+            title = title if title not in results else f"{title} ({i})"
+            results[title] = {"summary": summarize(rows, HANDS[hand]), "notes": rows}
+            if record:
+                steps = int(recorded[1][j])
+                if steps > record_steps:
+                    raise RuntimeError(f"{title}: played {steps} steps, more than the {record_steps} recorded")
+                q = np.asarray(recorded[0][j][:steps])
+                results[title]["qpos"] = H.mirror_qpos(q, side_from="right") if cfg.mirror else q
     return results
 
 
-def evaluate_synchronizer(params: dict, spec: PolicySpec, songs, env_config=None) -> dict:
+def evaluate_synchronizer(params: dict, spec: PolicySpec, songs, env_config=None, record: bool = False) -> dict:
     """{"before": results, "after": results}: a synchronizer's two frozen policies alone, then synchronized."""
-    return {"before": evaluate(unsynchronized(params), spec, songs, env_config),
-            "after": evaluate(params, spec, songs, env_config)}
+    return {"before": evaluate(unsynchronized(params), spec, songs, env_config, record=record),
+            "after": evaluate(params, spec, songs, env_config, record=record)}

@@ -1,0 +1,110 @@
+"""The planner as a teacher (`EnvConfig.teacher`, `TrainConfig.teacher_weight`): its label of a state, and what the
+label does to the actor."""
+from types import SimpleNamespace
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from dexguitar import envs
+from dexguitar.learn import networks as N
+from dexguitar.learn.policy import distribution
+from dexguitar.learn.trainer import Trainer, TrainConfig
+from dexguitar.music import cursor as CU
+from dexguitar.music import timeline as TL
+from test_envs import chord_song
+
+TEACHER = envs.EnvConfig(shift_prob=0.0, tempo_prob=0.0, teacher=True, physics="jax")
+
+
+@pytest.fixture(scope="module")
+def env():
+    return envs.make("left", [chord_song()], TEACHER).base
+
+
+def _at(env, frame_offset: int, qpos):
+    """A state of the env's first window, `frame_offset` frames into it, with the left hand's joints at `qpos`:
+    what `teacher` reads of a state (the cursor and the joints), without stepping MJX."""
+    cursor = CU.start(env.sample_window(jax.random.PRNGKey(0)))
+    for _ in range(frame_offset):
+        cursor, _ = CU.advance(cursor)
+    return SimpleNamespace(cursor=cursor, body=SimpleNamespace(data=SimpleNamespace(qpos=jnp.asarray(qpos))))
+
+
+def test_the_label_is_the_planned_action_on_the_plan_and_pulls_back_off_it(env):
+    plan = env.songs.plan
+    lo, hi = env.model.actuator_ctrlrange.T
+    half = (hi - lo) / 2
+    for offset in (0, 7):
+        state = _at(env, offset, np.zeros(env.model.nq))
+        f = int(CU.song_frame(state.cursor))
+        planned_q, planned_a = np.asarray(plan.qpos[0, f]), np.asarray(plan.action[0, f])
+        on_plan = np.asarray(env.teacher(_at(env, offset, planned_q)))
+        np.testing.assert_allclose(on_plan, np.clip(planned_a, -1, 1), atol=1e-7)
+        # 1 cm of the wrist's first slide and 0.1 rad of a finger joint off the plan, at gain 1
+        off = planned_q.copy()
+        off[0] += 0.01
+        off[12] -= 0.1
+        label = np.asarray(env.teacher(_at(env, offset, off)))
+        expected = planned_a.copy()
+        expected[0] -= 0.01 / half[0]
+        expected[12] += 0.1 / half[12]
+        np.testing.assert_allclose(label, np.clip(expected, -1, 1), atol=1e-6)
+    # the plan only labels: nothing is added to the action
+    assert np.all(np.asarray(env.feedforward(state.cursor)) == 0.0)
+
+
+def test_the_gain_scales_the_pull_and_a_teacher_needs_a_left_hand(env):
+    lo, hi = env.model.actuator_ctrlrange.T
+    plan = env.songs.plan
+    half_gain = envs.make("left", [chord_song()], TEACHER, teacher_gain=0.5).base
+    state = _at(env, 3, np.zeros(env.model.nq))
+    f = int(CU.song_frame(state.cursor))
+    off = np.asarray(plan.qpos[0, f]).copy()
+    off[20] += 0.05
+    d = np.asarray(half_gain.teacher(_at(env, 3, off))) - np.asarray(env.teacher(_at(env, 3, off)))
+    assert d[20] == pytest.approx(0.5 * 0.05 / ((hi[20] - lo[20]) / 2), rel=1e-5)
+    assert np.count_nonzero(d) == 1
+    with pytest.raises(ValueError, match="no left hand"):
+        envs.make("right", [chord_song()], TEACHER)
+    with pytest.raises(ValueError, match="teacher=True"):
+        Trainer(TrainConfig(num_envs=4, horizon=4, minibatch=8, teacher_weight=1.0), [TL.from_song(chord_song())], None,
+                envs.EnvConfig(physics="jax"))
+
+
+def _update(trainer, iteration: int, labels, batch_size=64):
+    """One `ppo_update` of a fresh actor on a batch whose advantages are all zero (PPO's own loss has no gradient),
+    with every sample labelled `labels`: (mean action before, after, update log)."""
+    key = jax.random.PRNGKey(0)
+    layout = trainer.layout
+    policy, obs_norm, _ = trainer.init_policy(key)
+    critic = N.init_params(trainer.critic, key, (layout.history, layout.frame_size),
+                           (layout.goal_size + layout.privileged,))
+    params = {"policy": policy, "critic": critic}
+    ts = SimpleNamespace(params=params, opt={k: trainer.optimizers[k].init(params[k]) for k in params},
+                         obs_norm=obs_norm, iteration=jnp.int32(iteration))
+    obs = jax.random.normal(key, (batch_size, layout.obs_size))
+    actor = trainer.actor_params(params, obs_norm)
+    mu0, log_std0 = distribution(trainer.spec, actor, obs)
+    batch = {"obs": obs, "privileged": jnp.ones((batch_size, layout.privileged)), "action": mu0,
+             "logp": N.gaussian_log_prob(mu0, log_std0, mu0), "adv": jnp.zeros(batch_size),
+             "target": jnp.zeros((batch_size, len(trainer.columns))),
+             "teacher": jnp.broadcast_to(labels, mu0.shape)}
+    new, _, log = trainer.ppo_update(ts, batch, key)
+    mu1, _ = distribution(trainer.spec, trainer.actor_params(new, obs_norm), obs)
+    return np.asarray(mu0), np.asarray(mu1), log
+
+
+def test_the_labels_pull_the_actor_and_nothing_once_faded():
+    cfg = TrainConfig(num_envs=4, horizon=16, minibatch=16, epochs=10, actor_lr=1e-3, teacher_weight=1.0,
+                      teacher_fade=10)
+    trainer = Trainer(cfg, [TL.from_song(chord_song())], None, TEACHER)
+    labels = jnp.zeros(27).at[0].set(0.3).at[12].set(-0.2)
+    mu0, mu1, log = _update(trainer, 0, labels)
+    before, after = np.abs(mu0 - np.asarray(labels)).mean(), np.abs(mu1 - np.asarray(labels)).mean()
+    assert after < 0.5 * before, (before, after)
+    assert np.isfinite(float(log["teacher_nll"])) and float(log["teacher_rms"]) > 0
+    # at the fade's end the teacher weighs nothing and zero advantages move nothing
+    mu0, mu1, _ = _update(trainer, 10, labels)
+    np.testing.assert_array_equal(mu0, mu1)
