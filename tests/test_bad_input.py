@@ -298,7 +298,7 @@ def test_undefined_scores_are_null_with_a_reason_in_json(monkeypatch, capsys):
     # `dexguitar eval --json` prints it so (the policy and the play itself stand in)
     monkeypatch.setattr(cli.PO, "load", lambda path: ({}, {"hand": "right"}))
     monkeypatch.setattr(cli.PO.PolicySpec, "from_meta", staticmethod(lambda meta: SimpleNamespace(kind="policy")))
-    monkeypatch.setattr(cli, "evaluate", lambda params, spec, songs, env_config=None: {
+    monkeypatch.setattr(cli, "evaluate", lambda params, spec, songs, env_config=None, record=False: {
         "Ode": {"summary": summary, "notes": [row]}})
     assert main(["eval", "--ckpt", "C", "--song", "ode_to_joy", "--json"]) == 0
     assert strict_json(capsys.readouterr().out)["Ode"]["left"]["f1"] is None

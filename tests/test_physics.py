@@ -116,7 +116,7 @@ def test_eval_json_stays_one_document_whatever_the_play_prints(monkeypatch, capf
     from types import SimpleNamespace
     from dexguitar import cli
 
-    def evaluate(params, spec, songs, env_config=None):
+    def evaluate(params, spec, songs, env_config=None, record=False):
         print("Warp 1.18.0 initialized")
         os.write(1, b"solver iterations limit reached - please increase iterations beyond 4\n")
         return {"Ode": {"summary": {"left": {"f1": 1.0}}, "notes": []}}
