@@ -7,11 +7,26 @@ pose; then the per-note F1 and terminations of the env's hand driven closed-loop
 
   open      the plan's action of the song frame
   gain1     the teacher's label (`EnvConfig.teacher`, gain 1)
+  gain4     the same at gain 4
   pose      the next planned pose as the PD target
   damped    the same plus C_WRIST / C_FINGER seconds x (planned velocity - velocity)
   lagged    damped plus the damping's lag, kd/kp x the planned velocity
 
+each also with Gaussian noise of `--play-noise` stds on its actions (what a student's error does to it).
+
     python experiments/teacher_labels.py --songs 32 --envs 16 --steps 600      # docs/results.md, "The learned hands"
+
+With `--fit`, what a student can learn of the labels from what it sees: the gain-1 labels of states visited by the
+labels plus Gaussian noise (`--noise`, DAgger's spread) are regressed by an MLP (512-256-128; the policy's is
+1024-1024-512) from each input set below, fitted on the first three quarters of the songs and measured (label rms, in
+half ranges) on the last quarter and closed-loop (per-note F1 of the fitted MLP acting, with no noise):
+
+  obs        the policy's observation (2 frames of link states, 5 upcoming notes)
+  joints     obs + the hand's joint positions and velocities
+  plan       obs + the plan's pose of the next frame (which a planner-free student must infer from the notes)
+  all        obs + joints + plan
+
+    python experiments/teacher_labels.py --fit --songs 32 --envs 16 --steps 1500
 """
 from __future__ import annotations
 
@@ -25,7 +40,8 @@ import numpy as np
 C_WRIST, C_FINGER = 0.1, 0.01           # s: velocity feedback through the target (`damped`; 0.2 or 0.15 s on
                                         # the wrist made it unstable)
 KD_OVER_KP = (0.4 / 10.0, 0.2 / 10.0)   # wrist, fingers (world/hands.py)
-LABELS = ("open", "gain1", "pose", "damped", "lagged")
+LABELS = ("open", "gain1", "gain4", "pose", "damped", "lagged")
+INPUTS = ("obs", "joints", "plan", "all")
 
 
 def label_fn(env, name: str):
@@ -45,6 +61,8 @@ def label_fn(env, name: str):
             return plan.action[song, f]
         if name == "gain1":
             return env.teacher(s)
+        if name == "gain4":
+            return jnp.clip(plan.action[song, f] + 4.0 * (plan.qpos[song, f] - s.body.data.qpos[j]) / half, -1, 1)
         out = (plan.qpos[song, nxt] - home) / half
         if name in ("damped", "lagged"):
             out = out + c * (plan.qvel[song, nxt] - v) / half
@@ -54,19 +72,133 @@ def label_fn(env, name: str):
     return label
 
 
-def play(env, label, envs: int, steps: int):
-    """(per-note F1, notes, terminations) of `label` driving the hand on training windows."""
-    def run(key):
-        s = jax.vmap(env.reset)(jax.random.split(key, envs))
+def play(env, label, envs: int, steps: int, noise: float = 0.0):
+    """(per-note F1, notes, terminations) of `label` plus `noise` x N(0, 1) driving the hand on training windows."""
+    def run(key, noise):
+        k0, k1 = jax.random.split(key)
+        s = jax.vmap(env.reset)(jax.random.split(k0, envs))
 
-        def one(s, _):
-            s = jax.vmap(env.step)(s, jax.vmap(label)(s))
+        def one(s, k):
+            a = jax.vmap(label)(s)
+            s = jax.vmap(env.step)(s, a + noise * jax.random.normal(k, a.shape))
             sc = s.info["left"]
             counted = (s.info["note_end"] & (sc[:, 4] + sc[:, 5] > 0)).astype(jnp.float32)
             return s, (jnp.sum(sc[:, 2] * counted), jnp.sum(counted), jnp.sum(s.terminated))
-        _, (f1, n, t) = jax.lax.scan(one, s, None, length=steps)
+        _, (f1, n, t) = jax.lax.scan(one, s, jax.random.split(k1, steps))
         return f1.sum() / n.sum(), n.sum(), t.sum()
-    return [float(x) for x in jax.jit(run)(jax.random.PRNGKey(0))]
+    return [float(x) for x in _jit(run)(jax.random.PRNGKey(0), jnp.float32(noise))]
+
+
+_JITTED = {}
+
+
+def _jit(f):
+    """jax.jit by the function's code and closure, so that one label plays every noise level in one program."""
+    key = (f.__code__, tuple(id(c.cell_contents) for c in f.__closure__ or ()))
+    return _JITTED.setdefault(key, jax.jit(f))
+
+
+def seen(base, s):
+    """What a student may see of state `s`: the observation, the joints (velocities x 0.1 s) and the next planned
+    pose."""
+    from dexguitar.music import cursor as CU
+    plan, j, song = base.songs.plan, jnp.asarray(base.hands[0].qpos), s.cursor.window.song
+    nxt = jnp.clip(CU.song_frame(s.cursor) + 1, 0, plan.frames[song] - 1)
+    d = s.body.data
+    return {"obs": s.obs, "joints": jnp.concatenate([d.qpos[j], 0.1 * d.qvel[j]]), "plan": plan.qpos[song, nxt]}
+
+
+def collect(env, envs: int, steps: int, noise: float, key):
+    """{obs, joints, plan, label, song} per visited state (steps x envs rows), the hand driven by the gain-1 label
+    plus `noise` x N(0, 1)."""
+    base = env.base
+
+    def features(s):
+        return dict(seen(base, s), label=base.teacher(s), song=s.cursor.window.song)
+
+    def run(key):
+        k0, k1 = jax.random.split(key)
+        s = jax.vmap(env.reset)(jax.random.split(k0, envs))
+
+        def one(s, k):
+            rec = jax.vmap(features)(s)
+            a = rec["label"] + noise * jax.random.normal(k, rec["label"].shape)
+            return jax.vmap(env.step)(s, a), rec
+        return jax.lax.scan(one, s, jax.random.split(k1, steps))[1]
+    out = jax.jit(run)(key)
+    return {k: np.asarray(v).reshape(envs * steps, -1) for k, v in out.items()}
+
+
+def inputs(rec, name: str, xp=np):
+    """The student's input `name` (INPUTS) of collected features."""
+    parts = {"obs": ["obs"], "joints": ["obs", "joints"], "plan": ["obs", "plan"], "all": ["obs", "joints", "plan"]}
+    return xp.concatenate([rec[p] for p in parts[name]], axis=-1)
+
+
+def fit(x, y, steps: int = 6000, batch: int = 512, lr: float = 1e-3, seed: int = 0):
+    """An MLP (512-256-128, ELU, inputs standardized) regressing y on x by Adam on the squared error:
+    -> predict(x)."""
+    import optax
+    mean, std = x.mean(0), x.std(0) + 1e-6
+    sizes = [x.shape[1], 512, 256, 128, y.shape[1]]
+    keys = jax.random.split(jax.random.PRNGKey(seed), len(sizes))
+    params = [(jax.random.normal(k, (a, b)) * np.sqrt(1.0 / a), jnp.zeros(b))
+              for k, a, b in zip(keys, sizes[:-1], sizes[1:])]
+
+    def net(params, x):
+        h = (x - mean) / std
+        for w, b in params[:-1]:
+            h = jax.nn.elu(h @ w + b)
+        return h @ params[-1][0] + params[-1][1]
+    opt = optax.adam(optax.cosine_decay_schedule(lr, steps))
+    state = opt.init(params)
+
+    @jax.jit
+    def update(params, state, idx):
+        loss, g = jax.value_and_grad(lambda p: jnp.mean((net(p, x[idx]) - y[idx]) ** 2))(params)
+        u, state = opt.update(g, state)
+        return optax.apply_updates(params, u), state, loss
+    x, y = jnp.asarray(x), jnp.asarray(y)
+    rng = np.random.default_rng(seed)
+    for _ in range(steps):
+        params, state, _ = update(params, state, jnp.asarray(rng.integers(0, len(x), batch)))
+    return jax.jit(lambda x: net(params, x))
+
+
+def rms_by_part(err):
+    """rms of (n, 27) errors: wrist slides, wrist rotations, fingers, all."""
+    parts = {"slides": slice(0, 3), "rotations": slice(3, 6), "fingers": slice(6, 27), "all": slice(0, 27)}
+    return {k: float(np.sqrt((err[:, s] ** 2).mean())) for k, s in parts.items()}
+
+
+def play_student(env, predict, name: str, envs: int, steps: int):
+    """(per-note F1, notes, terminations) of the fitted MLP acting on `env`'s windows."""
+    def act(s):
+        return jnp.clip(predict(inputs(seen(env.base, s), name, jnp)[None])[0], -1.0, 1.0)
+    return play(env, act, envs, steps)
+
+
+def fit_main(args, songs, cfg):
+    from dexguitar import envs as E
+    cut = args.songs * 3 // 4
+    train_env, test_env = E.make("left", songs[:cut], cfg), E.make("left", songs[cut:], cfg)
+    t0 = time.time()
+    train = collect(train_env, args.envs, args.steps, args.noise, jax.random.PRNGKey(1))
+    test = collect(test_env, args.envs, args.steps // 3, args.noise, jax.random.PRNGKey(2))
+    print(f"{len(train['label'])} training and {len(test['label'])} held-out states ({time.time() - t0:.0f} s)",
+          flush=True)
+    for name in args.inputs:
+        t0 = time.time()
+        predict = fit(inputs(train, name), train["label"], steps=args.fit_steps)
+        err = {k: np.asarray(predict(jnp.asarray(inputs(d, name)))) - d["label"]
+               for k, d in (("train", train), ("held-out", test))}
+        played = {k: play_student(e, predict, name, args.envs, args.steps // 3)
+                  for k, e in (("train", train_env), ("held-out", test_env))}
+        rms = "; ".join(f"{k}: " + ", ".join(f"{p} {v:.3f}" for p, v in rms_by_part(e).items()) for k, e in err.items())
+        print(f"{name:7s} label rms {rms}", flush=True)
+        print(f"{'':7s} closed-loop F1 " + "; ".join(f"{k} {f:.3f} over {n:.0f} notes, {t:.0f} terminations"
+                                                    for k, (f, n, t) in played.items())
+              + f" ({time.time() - t0:.0f} s)", flush=True)
 
 
 def main():
@@ -77,9 +209,17 @@ def main():
     ap.add_argument("--envs", type=int, default=16)
     ap.add_argument("--steps", type=int, default=600)
     ap.add_argument("--labels", nargs="+", choices=LABELS, default=list(LABELS))
+    ap.add_argument("--play-noise", type=float, nargs="+", default=[0.0],
+                    help="std of Gaussian noise added to each label's action while it plays")
+    ap.add_argument("--fit", action="store_true", help="regress the labels from what a student sees (see above)")
+    ap.add_argument("--inputs", nargs="+", choices=INPUTS, default=list(INPUTS))
+    ap.add_argument("--noise", type=float, default=0.02, help="std of the noise added to the labels while collecting")
+    ap.add_argument("--fit-steps", type=int, default=6000)
     args = ap.parse_args()
     songs = procedural.material("left", "general", 0, 256)[:args.songs]
     cfg = E.EnvConfig(shift_prob=0.0, tempo_prob=0.0, teacher=True, physics="jax")
+    if args.fit:
+        return fit_main(args, songs, cfg)
     env = E.make("left", songs, cfg)
     base = env.base
     plan = base.songs.plan
@@ -95,10 +235,12 @@ def main():
     print("rms step-to-step change of the planned action, per joint:", np.sqrt((np.concatenate(step) ** 2).mean(0)))
     print("rms planned action - next planned pose, per joint:      ", np.sqrt((np.concatenate(pose) ** 2).mean(0)))
     for name in args.labels:
-        t0 = time.time()
-        f1, notes, terminations = play(env, label_fn(base, name), args.envs, args.steps)
-        print(f"{name:7s} F1 {f1:.3f} over {notes:.0f} notes, {terminations:.0f} terminations ({time.time() - t0:.0f} s)",
-              flush=True)
+        label = label_fn(base, name)
+        for noise in args.play_noise:
+            t0 = time.time()
+            f1, notes, terminations = play(env, label, args.envs, args.steps, noise)
+            print(f"{name:7s} noise {noise:g}: F1 {f1:.3f} over {notes:.0f} notes, {terminations:.0f} terminations "
+                  f"({time.time() - t0:.0f} s)", flush=True)
 
 
 if __name__ == "__main__":
