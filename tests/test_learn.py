@@ -196,14 +196,18 @@ def kl_update(trainer, iteration=0, adv=1.0, **config):
     batch = {"obs": obs, "privileged": jnp.zeros((n, lay.privileged)), "action": action,
              "logp": N.gaussian_log_prob(mu, log_std, action),          # the acting policy's: the first KL is 0
              "adv": jnp.full((n, len(tr.columns)), adv), "target": jnp.zeros((n, len(tr.columns)))}
-    update = jax.jit(lambda p, o, b: tr.ppo_update(SimpleNamespace(params=p, opt=o, obs_norm=obs_norm,
-                                                                   iteration=jnp.int32(iteration)), b,
-                                                   jax.random.PRNGKey(0)))
-    return (cfg, params) + tuple(update(params, opt, batch))
+    if cfg not in _KL_UPDATES:      # the iteration is an argument: one program per config
+        _KL_UPDATES[cfg] = jax.jit(lambda p, o, b, i: tr.ppo_update(
+            SimpleNamespace(params=p, opt=o, obs_norm=obs_norm, iteration=i), b, jax.random.PRNGKey(0)))
+    return (cfg, params) + tuple(_KL_UPDATES[cfg](params, opt, batch, jnp.int32(iteration)))
+
+
+_KL_UPDATES = {}
 
 
 def test_kl_target_adapts_the_actor_rate_inside_the_update(trainer):
-    cfg, params, new_params, new_opt, log = kl_update(trainer)
+    # after a warm-up of one iteration (the warm-up test's program, compiled once)
+    cfg, params, new_params, new_opt, log = kl_update(trainer, iteration=1, actor_warmup=1)
     n = cfg.batch
     updates = cfg.epochs * (n // cfg.minibatch)                              # 2 x 2 = 4 minibatch steps
     moved = max(jax.tree.leaves(jax.tree.map(lambda a, b: float(jnp.abs(a - b).max()),
