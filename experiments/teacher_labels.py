@@ -8,6 +8,7 @@ pose; then the per-note F1 and terminations of the env's hand driven closed-loop
   open      the plan's action of the song frame
   gain1     the teacher's label (`EnvConfig.teacher`, gain 1)
   gain4     the same at gain 4
+  gain1d    gain1 plus C_WRIST / C_FINGER seconds x (planned velocity - velocity): damping through the target
   pose      the next planned pose as the PD target
   damped    the same plus C_WRIST / C_FINGER seconds x (planned velocity - velocity)
   lagged    damped plus the damping's lag, kd/kp x the planned velocity
@@ -40,7 +41,7 @@ import numpy as np
 C_WRIST, C_FINGER = 0.1, 0.01           # s: velocity feedback through the target (`damped`; 0.2 or 0.15 s on
                                         # the wrist made it unstable)
 KD_OVER_KP = (0.4 / 10.0, 0.2 / 10.0)   # wrist, fingers (world/hands.py)
-LABELS = ("open", "gain1", "gain4", "pose", "damped", "lagged")
+LABELS = ("open", "gain1", "gain4", "gain1d", "pose", "damped", "lagged")
 INPUTS = ("obs", "joints", "plan", "all")
 NOISE_ON = {"all": [1.0] * 27, "wrist": [1.0] * 6 + [0.0] * 21, "fingers": [0.0] * 6 + [1.0] * 21}
 
@@ -64,6 +65,8 @@ def label_fn(env, name: str):
             return env.teacher(s)
         if name == "gain4":
             return jnp.clip(plan.action[song, f] + 4.0 * (plan.qpos[song, f] - s.body.data.qpos[j]) / half, -1, 1)
+        if name == "gain1d":
+            return jnp.clip(env.teacher(s) + c * (plan.qvel[song, f] - v) / half, -1, 1)
         out = (plan.qpos[song, nxt] - home) / half
         if name in ("damped", "lagged"):
             out = out + c * (plan.qvel[song, nxt] - v) / half
@@ -205,6 +208,7 @@ def fit_main(args, songs, cfg):
 
 
 def main():
+    global C_WRIST, C_FINGER
     from dexguitar import envs as E
     from dexguitar.music import procedural
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -214,12 +218,15 @@ def main():
     ap.add_argument("--labels", nargs="+", choices=LABELS, default=list(LABELS))
     ap.add_argument("--play-noise", type=float, nargs="+", default=[0.0],
                     help="std of Gaussian noise added to each label's action while it plays")
+    ap.add_argument("--c-wrist", type=float, default=C_WRIST, help="s: the wrist's velocity feedback (gain1d, damped)")
+    ap.add_argument("--c-finger", type=float, default=C_FINGER, help="s: the fingers' velocity feedback")
     ap.add_argument("--noise-on", choices=NOISE_ON, default="all", help="the joints that --play-noise shakes")
     ap.add_argument("--fit", action="store_true", help="regress the labels from what a student sees (see above)")
     ap.add_argument("--inputs", nargs="+", choices=INPUTS, default=list(INPUTS))
     ap.add_argument("--noise", type=float, default=0.02, help="std of the noise added to the labels while collecting")
     ap.add_argument("--fit-steps", type=int, default=6000)
     args = ap.parse_args()
+    C_WRIST, C_FINGER = args.c_wrist, args.c_finger
     songs = procedural.material("left", "general", 0, 256)[:args.songs]
     cfg = E.EnvConfig(shift_prob=0.0, tempo_prob=0.0, teacher=True, physics="jax")
     if args.fit:
