@@ -23,13 +23,15 @@ def env():
     return envs.make("left", [chord_song()], TEACHER).base
 
 
-def _at(env, frame_offset: int, qpos):
-    """A state of the env's first window, `frame_offset` frames into it, with the left hand's joints at `qpos`:
-    what `teacher` reads of a state (the cursor and the joints), without stepping MJX."""
+def _at(env, frame_offset: int, qpos, qvel=None):
+    """A state of the env's first window, `frame_offset` frames into it, with the left hand's joints at `qpos` and
+    `qvel` (zeros unless given): what `teacher` reads of a state (the cursor and the joints), without stepping MJX."""
     cursor = CU.start(env.sample_window(jax.random.PRNGKey(0)))
     for _ in range(frame_offset):
         cursor, _ = CU.advance(cursor)
-    return SimpleNamespace(cursor=cursor, body=SimpleNamespace(data=SimpleNamespace(qpos=jnp.asarray(qpos))))
+    qvel = np.zeros_like(qpos) if qvel is None else qvel
+    return SimpleNamespace(cursor=cursor, body=SimpleNamespace(data=SimpleNamespace(qpos=jnp.asarray(qpos),
+                                                                                    qvel=jnp.asarray(qvel))))
 
 
 def test_the_label_is_the_planned_action_on_the_plan_and_pulls_back_off_it(env):
@@ -66,6 +68,19 @@ def test_the_gain_scales_the_pull_and_a_teacher_needs_a_left_hand(env):
     d = np.asarray(half_gain.teacher(_at(env, 3, off))) - np.asarray(env.teacher(_at(env, 3, off)))
     assert d[20] == pytest.approx(0.5 * 0.05 / ((hi[20] - lo[20]) / 2), rel=1e-5)
     assert np.count_nonzero(d) == 1
+    # damping through the target: + c x (planned velocity - velocity) / half range, c 0.1 s on the wrist's joints
+    # and 0.03 s on the fingers'; on the planned pose at the planned velocity, nothing
+    damped = envs.make("left", [chord_song()], TEACHER, teacher_damping=0.1, teacher_finger_damping=0.03).base
+    on = np.asarray(plan.qpos[0, f]), np.asarray(plan.qvel[0, f])
+    np.testing.assert_allclose(np.asarray(damped.teacher(_at(env, 3, *on))), np.asarray(env.teacher(_at(env, 3, *on))),
+                               atol=1e-7)
+    slow = on[1].copy()
+    slow[0] -= 0.1          # the wrist's first slide 0.1 m/s behind the plan, the fingers' joint 15 0.5 rad/s ahead
+    slow[15] += 0.5
+    d = np.asarray(damped.teacher(_at(env, 3, on[0], slow))) - np.asarray(env.teacher(_at(env, 3, on[0], slow)))
+    half = (hi - lo) / 2
+    np.testing.assert_allclose(d[[0, 15]], [0.1 * 0.1 / half[0], -0.03 * 0.5 / half[15]], rtol=1e-5)
+    assert np.count_nonzero(d) == 2
     with pytest.raises(ValueError, match="no left hand"):
         envs.make("right", [chord_song()], TEACHER)
     with pytest.raises(ValueError, match="teacher=True"):

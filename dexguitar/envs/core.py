@@ -39,6 +39,7 @@ mjx = _quiet_mjx()
 
 HISTORY = 2                    # frames of link states in the observation (reference §4)
 LINK_FEATURES = 13             # position 3, quaternion 4, linear velocity 3, angular velocity 3
+WRIST_DOF = 6                  # each hand's joints start with the wrist's 3 slides and 3 hinges (`world.hands`)
 # r_contact of Eq. 15: the picking hand's thumb touches its index finger where their capsules' surfaces are at most
 # this far apart (m). The reference pays it for net contact forces (PhysX, contact offset 0.1 mm a shape), i.e. on
 # touching; 0.2 mm, the gap at which PhysX makes that contact, leaves room for float32 rounding and stays well below
@@ -80,6 +81,9 @@ class EnvConfig:
                                          # added to the action: a learned hand's labels (`TrainConfig.teacher_weight`)
     teacher_gain: float = 1.0            # the label's pull back to the plan: planned action + gain x (planned joint
                                          # position - joint position) / half range
+    teacher_damping: float = 0.0         # s: + this x (planned joint velocity - joint velocity) / half range on the
+    teacher_finger_damping: float = 0.0  # wrist, and this on the fingers: damping through the target, which keeps
+                                         # the label playing through a student's errors (docs/results.md)
     margin_reward: float = 0.0           # not in the paper: added to each string's column times its press margin
                                          # (`rewards.margin_reward`), a smooth measure of how robustly it plays
     physics: str = "auto"                # MJX's "jax" or "warp" implementation; "auto": Warp on a GPU where warp-lang
@@ -428,13 +432,18 @@ class GuitarEnv:
     def teacher(self, state: State):
         """(27,) the left planner's action for this state: the planned action of the song frame plus the PD target
         offset that pulls the hand back to the planned pose (`EnvConfig.teacher_gain`). The plan's PD targets alone
-        already pull toward the plan at the PD's own rate; the gain stiffens that pull where the hand strayed.
+        already pull toward the plan at the PD's own rate; the gain stiffens that pull where the hand strayed, and
+        `teacher_damping` / `teacher_finger_damping` damp the lightly damped wrist and fingers through the target.
         DAgger's expert: it labels any state a student visits, not only the planned ones."""
-        plan, song, i = self.plans["left"], state.cursor.window.song, self.roles.index("left")
+        cfg, plan, song, i = self.config, self.plans["left"], state.cursor.window.song, self.roles.index("left")
         f = jnp.clip(CU.song_frame(state.cursor), 0, plan.frames[song] - 1)
-        q = state.body.data.qpos[jnp.asarray(self.hands[i].qpos)]
+        j = jnp.asarray(self.hands[i].qpos)
+        q, v = state.body.data.qpos[j], state.body.data.qvel[j]
         half = self._ctrl_half[i * H.N_DOF:(i + 1) * H.N_DOF]
-        return jnp.clip(plan.action[song, f] + self.config.teacher_gain * (plan.qpos[song, f] - q) / half, -1.0, 1.0)
+        damping = jnp.where(jnp.arange(H.N_DOF) < WRIST_DOF, cfg.teacher_damping, cfg.teacher_finger_damping)
+        label = plan.action[song, f] + (cfg.teacher_gain * (plan.qpos[song, f] - q)
+                                        + damping * (plan.qvel[song, f] - v)) / half
+        return jnp.clip(label, -1.0, 1.0)
 
     @property
     def picks(self) -> bool:
