@@ -9,6 +9,7 @@ pose; then the per-note F1 and terminations of the env's hand driven closed-loop
   gain1     the teacher's label (`EnvConfig.teacher`, gain 1)
   gain4     the same at gain 4
   gain1d    gain1 plus C_WRIST / C_FINGER seconds x (planned velocity - velocity): damping through the target
+            (`EnvConfig.teacher_damping`, `teacher_finger_damping`)
   pose      the next planned pose as the PD target
   damped    the same plus C_WRIST / C_FINGER seconds x (planned velocity - velocity)
   lagged    damped plus the damping's lag, kd/kp x the planned velocity
@@ -32,6 +33,7 @@ half ranges) on the last quarter and closed-loop (per-note F1 of the fitted MLP 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 
 import jax
@@ -53,6 +55,8 @@ def label_fn(env, name: str):
     wrist = jnp.arange(27) < 6
     c = jnp.where(wrist, C_WRIST, C_FINGER)
     lag = jnp.where(wrist, *KD_OVER_KP)
+    damped = type(env)(env.songs, dataclasses.replace(env.config, teacher_damping=C_WRIST,
+                                                      teacher_finger_damping=C_FINGER)) if name == "gain1d" else None
 
     def label(s):
         song = s.cursor.window.song
@@ -66,7 +70,7 @@ def label_fn(env, name: str):
         if name == "gain4":
             return jnp.clip(plan.action[song, f] + 4.0 * (plan.qpos[song, f] - s.body.data.qpos[j]) / half, -1, 1)
         if name == "gain1d":
-            return jnp.clip(env.teacher(s) + c * (plan.qvel[song, f] - v) / half, -1, 1)
+            return damped.teacher(s)
         out = (plan.qpos[song, nxt] - home) / half
         if name in ("damped", "lagged"):
             out = out + c * (plan.qvel[song, nxt] - v) / half
