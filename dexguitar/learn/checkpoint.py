@@ -71,7 +71,7 @@ class _Silenced(logging.Filter):
         except Exception:           # noqa: BLE001 - a record that cannot be formatted is not ours to judge
             return True
         if record.name == "asyncio" and "never retrieved" in message and any(
-                k in message for k in ("orbax", "TensorStore", "tensorstore")):
+                k in message for k in ("orbax", "TensorStore", "tensorstore", "OCDBT")):
             return False
         return not (disk_full(exc) or any(t in message for t in _FULL_TEXT))
 
