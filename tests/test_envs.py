@@ -124,9 +124,10 @@ def test_evaluation_plays_the_song_from_its_start_and_stops():
 
 
 def test_right_step_under_jit_and_vmap():
-    """(The duet's training step: tests/test_sync.py, inside the synchronizer's training iteration.)"""
+    """The right hand's pure step, without the episode wrappers (auto-reset: the left hand's tests above; the duet's
+    training step: tests/test_sync.py, inside the synchronizer's training iteration)."""
     hand, obs, columns, hands = "right", 2 * 16 * 13 + 35, 1, 1
-    env = envs.make(hand, [chord_song()])
+    env = envs.make(hand, [chord_song()]).base
     state = jax.jit(jax.vmap(env.reset))(jax.random.split(jax.random.PRNGKey(0), N_ENVS))
     step = jax.jit(jax.vmap(env.step))
     for _ in range(3):
