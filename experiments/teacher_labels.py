@@ -29,6 +29,14 @@ half ranges) on the last quarter and closed-loop (per-note F1 of the fitted MLP 
   all        obs + joints + plan
 
     python experiments/teacher_labels.py --fit --songs 64 --envs 16 --steps 4000     # docs/results.md
+
+With `--student POLICY`, where a trained student departs from its teacher: the policy's mean action and the teacher
+(the damped label of `--c-wrist` / `--c-finger`) each drive the hand on training windows of the first `--songs`
+songs it trained on and of as many held-out ones (seed 1000); per driver, F1 by the note's pressed strings and lowest
+fret, and for the student the rms of (its action - the label) on its own states, per joint group, in the first
+frames of a note (the shift to it) and after.
+
+    python experiments/teacher_labels.py --student runs/left-learned-damped/policy --songs 16 --c-finger 0.03
 """
 from __future__ import annotations
 
@@ -206,6 +214,74 @@ def fit_main(args, songs, cfg):
               + f" ({time.time() - t0:.0f} s)", flush=True)
 
 
+SHIFT_FRAMES = 6                         # the first frames of a note: the hand moving to it
+
+
+def drive(env, act, envs: int, steps: int):
+    """Per step and env (steps, envs, ...): the action's departure from the teacher's label, the note's goal code and
+    frame, and the per-note scores, `act(state)` driving the hand on training windows."""
+    from dexguitar.music import cursor as CU
+    base = env.base
+
+    def run(key):
+        s = jax.vmap(env.reset)(jax.random.split(key, envs))
+
+        def one(s, _):
+            a = jax.vmap(act)(s)
+            rec = {"err": a - jax.vmap(base.teacher)(s), "goal": jax.vmap(lambda c: CU.current(c)[0])(s.cursor),
+                   "note_frame": s.cursor.note_frame}
+            s = jax.vmap(env.step)(s, a)
+            sc = s.info["left"]
+            rec.update(f1=sc[:, 2], counted=s.info["note_end"] & (sc[:, 4] + sc[:, 5] > 0),
+                       terminated=s.terminated)
+            return s, rec
+        return jax.lax.scan(one, s, None, length=steps)[1]
+    return jax.tree.map(np.asarray, jax.jit(run)(jax.random.PRNGKey(0)))
+
+
+def f1_by_kind(rec) -> dict:
+    """Per-note F1 (and notes) by pressed strings and by the lowest pressed fret of the note closed."""
+    goal, counted, f1 = rec["goal"], rec["counted"], rec["f1"]
+    pressed = goal > 0
+    n = pressed.sum(-1)
+    low = np.where(pressed, goal, 99).min(-1)
+    kinds = {"all": counted, "1 string": counted & (n == 1), "2 strings": counted & (n == 2),
+             "3+ strings": counted & (n >= 3), "frets 1-4": counted & (low <= 4),
+             "frets 5-9": counted & (low >= 5) & (low <= 9), "frets 10+": counted & (low >= 10) & (low < 99)}
+    return {k: (float(f1[m].mean()) if m.any() else float("nan"), int(m.sum())) for k, m in kinds.items()}
+
+
+def student_main(args, cfg):
+    from dexguitar import envs as E
+    from dexguitar.learn import policy as PO
+    from dexguitar.music import procedural
+    params, meta = PO.load(args.student)
+    mean = PO.make_act(params, meta)
+    cfg = dataclasses.replace(cfg, teacher_damping=C_WRIST, teacher_finger_damping=C_FINGER)
+    sets = {"training": procedural.material("left", "general", 0, 256)[:args.songs],
+            "held-out": procedural.material("left", "general", 1000, args.songs)}
+    for name, songs in sets.items():
+        env = E.make("left", songs, cfg)
+        for who, act in (("student", lambda s: jnp.clip(mean(s.obs), -1.0, 1.0)), ("teacher", env.base.teacher)):
+            t0 = time.time()
+            rec = drive(env, act, args.envs, args.steps)
+            kinds = ", ".join(f"{k} {f:.3f} ({n})" for k, (f, n) in f1_by_kind(rec).items())
+            print(f"{name} songs, {who}: F1 {kinds}; {int(rec['terminated'].sum())} terminations "
+                  f"({time.time() - t0:.0f} s)", flush=True)
+            if who == "teacher":
+                continue
+            err = rec["err"].reshape(-1, rec["err"].shape[-1])
+            shift = (rec["note_frame"] < SHIFT_FRAMES).reshape(-1)
+            for part, rows in (("all frames", slice(None)), (f"first {SHIFT_FRAMES} frames of a note", shift),
+                               ("later frames", ~shift)):
+                print(f"  student - label, rms on {part}: " + ", ".join(
+                    f"{k} {v:.3f}" for k, v in rms_by_part(err[rows]).items()), flush=True)
+            names = [env.base.model.actuator(i).name for i in range(err.shape[1])]
+            worst = np.argsort(-np.sqrt((err ** 2).mean(0)))[:6]
+            print("  largest: " + ", ".join(f"{names[i]} {np.sqrt((err[:, i] ** 2).mean()):.3f}" for i in worst),
+                  flush=True)
+
+
 def main():
     global C_WRIST, C_FINGER
     from dexguitar import envs as E
@@ -224,12 +300,15 @@ def main():
     ap.add_argument("--inputs", nargs="+", choices=INPUTS, default=list(INPUTS))
     ap.add_argument("--noise", type=float, default=0.02, help="std of the noise added to the labels while collecting")
     ap.add_argument("--fit-steps", type=int, default=6000)
+    ap.add_argument("--student", help="a trained left policy: where it departs from its teacher (see above)")
     args = ap.parse_args()
     C_WRIST, C_FINGER = args.c_wrist, args.c_finger
     songs = procedural.material("left", "general", 0, 256)[:args.songs]
     cfg = E.EnvConfig(shift_prob=0.0, tempo_prob=0.0, teacher=True, physics="jax")
     if args.fit:
         return fit_main(args, songs, cfg)
+    if args.student:
+        return student_main(args, cfg)
     env = E.make("left", songs, cfg)
     base = env.base
     plan = base.songs.plan
