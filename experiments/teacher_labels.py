@@ -26,15 +26,17 @@ half ranges) on the last quarter and closed-loop (per-note F1 of the fitted MLP 
   obs        the policy's observation (2 frames of link states, 5 upcoming notes)
   joints     obs + the hand's joint positions and velocities
   plan       obs + the plan's pose of the next frame (which a planner-free student must infer from the notes)
+  plan-wrist, plan-fingers   obs + the same pose's wrist joints only, or its finger joints only (the fingering)
   all        obs + joints + plan
 
     python experiments/teacher_labels.py --fit --songs 64 --envs 16 --steps 4000     # docs/results.md
 
 With `--student POLICY`, where a trained student departs from its teacher: the policy's mean action and the teacher
 (the damped label of `--c-wrist` / `--c-finger`) each drive the hand on training windows of the first `--songs`
-songs it trained on and of as many held-out ones (seed 1000); per driver, F1 by the note's pressed strings and lowest
-fret, and for the student the rms of (its action - the label) on its own states, per joint group, in the first
-frames of a note (the shift to it) and after.
+songs it trained on and of as many held-out ones (seed 1000), and so do the two mixes of the student's wrist and the
+teacher's fingers and the reverse; per driver, F1 by the note's pressed strings and lowest fret, and for the student
+the rms of (its action - the label) on its own states, per joint group, in the first frames of a note (the shift to
+it) and after.
 
     python experiments/teacher_labels.py --student runs/left-learned-damped/policy --songs 16 --c-finger 0.03
 """
@@ -52,7 +54,7 @@ C_WRIST, C_FINGER = 0.1, 0.01           # s: velocity feedback through the targe
                                         # the wrist made it unstable)
 KD_OVER_KP = (0.4 / 10.0, 0.2 / 10.0)   # wrist, fingers (world/hands.py)
 LABELS = ("open", "gain1", "gain4", "gain1d", "pose", "damped", "lagged")
-INPUTS = ("obs", "joints", "plan", "all")
+INPUTS = ("obs", "joints", "plan", "plan-wrist", "plan-fingers", "all")
 NOISE_ON = {"all": (True, True), "wrist": (True, False), "fingers": (False, True)}   # (wrist, fingers)
 
 
@@ -118,7 +120,9 @@ def seen(base, s):
     plan, j, song = base.songs.plan, jnp.asarray(base.hands[0].qpos), s.cursor.window.song
     nxt = jnp.clip(CU.song_frame(s.cursor) + 1, 0, plan.frames[song] - 1)
     d = s.body.data
-    return {"obs": s.obs, "joints": jnp.concatenate([d.qpos[j], 0.1 * d.qvel[j]]), "plan": plan.qpos[song, nxt]}
+    pose = plan.qpos[song, nxt]
+    return {"obs": s.obs, "joints": jnp.concatenate([d.qpos[j], 0.1 * d.qvel[j]]), "plan": pose,
+            "plan-wrist": jnp.where(is_wrist(), pose, 0.0), "plan-fingers": jnp.where(is_wrist(), 0.0, pose)}
 
 
 def collect(env, envs: int, steps: int, noise: float, key):
@@ -144,7 +148,8 @@ def collect(env, envs: int, steps: int, noise: float, key):
 
 def inputs(rec, name: str, xp=np):
     """The student's input `name` (INPUTS) of collected features."""
-    parts = {"obs": ["obs"], "joints": ["obs", "joints"], "plan": ["obs", "plan"], "all": ["obs", "joints", "plan"]}
+    parts = {"obs": ["obs"], "joints": ["obs", "joints"], "plan": ["obs", "plan"], "plan-wrist": ["obs", "plan-wrist"],
+             "plan-fingers": ["obs", "plan-fingers"], "all": ["obs", "joints", "plan"]}
     return xp.concatenate([rec[p] for p in parts[name]], axis=-1)
 
 
@@ -262,13 +267,17 @@ def student_main(args, cfg):
             "held-out": procedural.material("left", "general", 1000, args.songs)}
     for name, songs in sets.items():
         env = E.make("left", songs, cfg)
-        for who, act in (("student", lambda s: jnp.clip(mean(s.obs), -1.0, 1.0)), ("teacher", env.base.teacher)):
+        student, teacher, wrist = (lambda s: jnp.clip(mean(s.obs), -1.0, 1.0)), env.base.teacher, is_wrist()
+        drivers = {"student": student, "teacher": teacher,
+                   "student's wrist, teacher's fingers": lambda s: jnp.where(wrist, student(s), teacher(s)),
+                   "teacher's wrist, student's fingers": lambda s: jnp.where(wrist, teacher(s), student(s))}
+        for who, act in drivers.items():
             t0 = time.time()
             rec = drive(env, act, args.envs, args.steps)
             kinds = ", ".join(f"{k} {f:.3f} ({n})" for k, (f, n) in f1_by_kind(rec).items())
             print(f"{name} songs, {who}: F1 {kinds}; {int(rec['terminated'].sum())} terminations "
                   f"({time.time() - t0:.0f} s)", flush=True)
-            if who == "teacher":
+            if who != "student":
                 continue
             err = rec["err"].reshape(-1, rec["err"].shape[-1])
             shift = (rec["note_frame"] < SHIFT_FRAMES).reshape(-1)
