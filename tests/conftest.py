@@ -44,6 +44,25 @@ jax.monitoring.register_event_duration_secs_listener(
     lambda name, secs, **kw: COMPILES.append(name) if name in ("/jax/core/compile/backend_compile_duration",
                                                                 "/dexguitar/chunk/load_duration") else None)
 
+# DEXGUITAR_COMPILE_LOG=DIR: each test process appends, per trace, lowering, compile or chunk load of over 0.3 s, a
+# line "test<TAB>event<TAB>function<TAB>seconds" to DIR/<pid>.tsv (docs/tests.md: where the suite's time goes)
+RUNNING = ["(collection)"]
+if os.environ.get("DEXGUITAR_COMPILE_LOG"):
+    _LOG = Path(os.environ["DEXGUITAR_COMPILE_LOG"]) / f"{os.getpid()}.tsv"
+    _LOG.parent.mkdir(parents=True, exist_ok=True)
+
+    def _log_compile(name, secs, **kw):
+        if name.startswith(("/jax/core/compile/", "/dexguitar/chunk/")) and secs > 0.3:
+            with open(_LOG, "a") as f:
+                f.write(f"{RUNNING[0]}\t{name.rsplit('/', 1)[1]}\t{kw.get('fun_name')}\t{secs:.2f}\n")
+    jax.monitoring.register_event_duration_secs_listener(_log_compile)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    RUNNING[0] = item.nodeid
+    yield
+
 
 @pytest.fixture
 def compiles():

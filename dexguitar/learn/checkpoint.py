@@ -23,6 +23,7 @@ import os
 import shutil
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import jax
@@ -107,6 +108,14 @@ def _quiet_leftovers() -> None:
     atexit.register(gc.collect)
 
 
+def collect_abandoned() -> None:
+    """Collect now the reads or writes that orbax abandoned when a restore or a save failed, quietly: their errors go
+    to `_quiet_leftovers`' hook, and a read that never started would warn that its coroutine "was never awaited"."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=r"coroutine .* was never awaited", category=RuntimeWarning)
+        gc.collect()
+
+
 def _manager(directory: Path, keep: int = 2, create: bool = True, writer: bool = False) -> ocp.CheckpointManager:
     """Orbax's manager of a checkpoint directory; a `writer` (the one process that saves there) first removes the
     temporary folders of saves that never completed."""
@@ -172,7 +181,7 @@ class Saver:
 
     def _failure(self, err: BaseException) -> RunError:
         """The RunError of a failed save, once its half-written step is removed."""
-        gc.collect()                # the abandoned writes, quietly (`_quiet_leftovers`)
+        collect_abandoned()
         for tmp in self.directory.glob(f"{self._step}.orbax-checkpoint-tmp*"):
             shutil.rmtree(tmp, ignore_errors=True)
         kept = max(self._mngr.all_steps(), default=None)
@@ -248,7 +257,7 @@ def restore(directory, target, step: int | None = None, only=None, set_damaged_a
             with _manager(directory, create=False) as mngr:
                 restored = mngr.restore(s, args=ocp.args.StandardRestore(_leaves(target, only)))
         except Exception as err:    # noqa: BLE001 - a damaged checkpoint surfaces as many error types
-            gc.collect()            # the abandoned reads, quietly (`_quiet_leftovers`)
+            collect_abandoned()
             errors.append(f"step {s}: {_why(err)}")
             damaged.append(s)
             print(f"warning: {directory}: checkpoint step {s} cannot be read ({_why(err)}); trying an older one",
