@@ -60,8 +60,7 @@ NOISE_ON = {"all": (True, True), "wrist": (True, False), "fingers": (False, True
 
 def is_wrist():
     """(27,) bool: the left hand's wrist joints."""
-    from dexguitar.envs.core import WRIST_DOF
-    from dexguitar.world.hands import N_DOF
+    from dexguitar.world.hands import N_DOF, WRIST_DOF
     return jnp.arange(N_DOF) < WRIST_DOF
 
 

@@ -39,7 +39,6 @@ mjx = _quiet_mjx()
 
 HISTORY = 2                    # frames of link states in the observation (reference §4)
 LINK_FEATURES = 13             # position 3, quaternion 4, linear velocity 3, angular velocity 3
-WRIST_DOF = 6                  # each hand's joints start with the wrist's 3 slides and 3 hinges (`world.hands`)
 # r_contact of Eq. 15: the picking hand's thumb touches its index finger where their capsules' surfaces are at most
 # this far apart (m). The reference pays it for net contact forces (PhysX, contact offset 0.1 mm a shape), i.e. on
 # touching; 0.2 mm, the gap at which PhysX makes that contact, leaves room for float32 rounding and stays well below
@@ -440,7 +439,7 @@ class GuitarEnv:
         j = jnp.asarray(self.hands[i].qpos)
         q, v = state.body.data.qpos[j], state.body.data.qvel[j]
         half = self._ctrl_half[i * H.N_DOF:(i + 1) * H.N_DOF]
-        damping = jnp.where(jnp.arange(H.N_DOF) < WRIST_DOF, cfg.teacher_damping, cfg.teacher_finger_damping)
+        damping = jnp.where(jnp.arange(H.N_DOF) < H.WRIST_DOF, cfg.teacher_damping, cfg.teacher_finger_damping)
         label = plan.action[song, f] + (cfg.teacher_gain * (plan.qpos[song, f] - q)
                                         + damping * (plan.qvel[song, f] - v)) / half
         return jnp.clip(label, -1.0, 1.0)

@@ -31,9 +31,8 @@ import numpy as np
 from dexguitar.errors import UserError
 from dexguitar.world import hands as H
 
-WRIST_DOF = 6
-FINGER_JOINTS = slice(WRIST_DOF, H.N_DOF)       # the 21 finger joints in qpos order (`hands.joints`)
-N_FINGER = H.N_DOF - WRIST_DOF
+FINGER_JOINTS = slice(H.WRIST_DOF, H.N_DOF)       # the 21 finger joints in qpos order (`hands.joints`)
+N_FINGER = H.N_DOF - H.WRIST_DOF
 CACHE_VERSION = "1"                             # bump when what the cache holds changes meaning
 KEYS = ("jerk", "energy", "human_distance")
 

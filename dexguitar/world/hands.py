@@ -23,6 +23,7 @@ MODELS_DIR = Path(__file__).resolve().parents[2] / "models"
 FINGERS = ("index", "middle", "ring", "pinky")
 KEY_LINKS = ("wrist", "thumb1", "thumb2", "thumb3") + tuple(f"{f}{k}" for f in FINGERS for k in (1, 2, 3))
 N_DOF = 27
+WRIST_DOF = 6                # the joints start with the wrist's 3 slides and 3 hinges (`joints`), then 21 fingers'
 
 # PD gains and joint armature (reference §2.2): kp = 10 everywhere, kd = 0.4 on the wrist, 0.2 on fingers.
 KP = 10.0
