@@ -18,6 +18,10 @@ each also with Gaussian noise of `--play-noise` stds on its actions (what a stud
 
     python experiments/teacher_labels.py --songs 32 --envs 16 --steps 600      # docs/results.md, "The learned hands"
 
+With `--hand right`, the same of the right planner's labels on held-out songs of the mixed material (seed 1000):
+
+    python experiments/teacher_labels.py --hand right --songs 16 --steps 400 --labels open --play-noise 0 0.01 0.03 0.1
+
 With `--fit`, what a student can learn of the labels from what it sees: the gain-1 labels of states visited by the
 labels plus Gaussian noise (`--noise`, DAgger's spread) are regressed by an MLP (512-256-128; the policy's is
 1024-1024-512) from each input set below, fitted on the first three quarters of the songs and measured (label rms, in
@@ -66,7 +70,7 @@ def is_wrist():
 
 def label_fn(env, name: str):
     from dexguitar.music import cursor as CU
-    plan, j = env.songs.plan, jnp.asarray(env.hands[0].qpos)
+    plan, j = env.plans[env.roles[0]], jnp.asarray(env.hands[0].qpos)
     half, home = env._ctrl_half, env._home[j]
     c = jnp.where(is_wrist(), C_WRIST, C_FINGER)
     lag = jnp.where(is_wrist(), *KD_OVER_KP)
@@ -93,7 +97,8 @@ def label_fn(env, name: str):
 
 def play(env, label, envs: int, steps: int, noises=(0.0,), on: str = "all"):
     """[(per-note F1, notes, terminations)] of `label` plus noise x N(0, 1) on the joints `on` (NOISE_ON) driving the
-    hand on training windows, for each noise of `noises` (one program for all)."""
+    env's hand on training windows, for each noise of `noises` (one program for all)."""
+    hand = env.base.roles[0]
     mask = jnp.where(is_wrist(), *NOISE_ON[on]).astype(jnp.float32)
 
     def run(key, noise):
@@ -103,7 +108,7 @@ def play(env, label, envs: int, steps: int, noises=(0.0,), on: str = "all"):
         def one(s, k):
             a = jax.vmap(label)(s)
             s = jax.vmap(env.step)(s, a + noise * mask * jax.random.normal(k, a.shape))
-            sc = s.info["left"]
+            sc = s.info[hand]
             counted = (s.info["note_end"] & (sc[:, 4] + sc[:, 5] > 0)).astype(jnp.float32)
             return s, (jnp.sum(sc[:, 2] * counted), jnp.sum(counted), jnp.sum(s.terminated))
         _, (f1, n, t) = jax.lax.scan(one, s, jax.random.split(k1, steps))
@@ -295,6 +300,8 @@ def main():
     from dexguitar import envs as E
     from dexguitar.music import procedural
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--hand", choices=("left", "right"), default="left",
+                    help="right: the right planner's labels on held-out songs of the mixed material (seed 1000)")
     ap.add_argument("--songs", type=int, default=32)
     ap.add_argument("--envs", type=int, default=16)
     ap.add_argument("--steps", type=int, default=600)
@@ -311,15 +318,18 @@ def main():
     ap.add_argument("--student", help="a trained left policy: where it departs from its teacher (see above)")
     args = ap.parse_args()
     C_WRIST, C_FINGER = args.c_wrist, args.c_finger
-    songs = procedural.material("left", "general", 0, 256)[:args.songs]
     cfg = E.EnvConfig(shift_prob=0.0, tempo_prob=0.0, teacher=True, physics="jax")
+    if args.hand == "right" and (args.fit or args.student):
+        ap.error("--fit and --student study the left hand")
+    songs = (procedural.material("left", "general", 0, 256)[:args.songs] if args.hand == "left"
+             else procedural.material("right", "mixed", 1000, args.songs))
     if args.fit:
         return fit_main(args, songs, cfg)
     if args.student:
         return student_main(args, cfg)
-    env = E.make("left", songs, cfg)
+    env = E.make(args.hand, songs, cfg)
     base = env.base
-    plan = base.songs.plan
+    plan = base.plans[args.hand]
     lo, hi = base.model.actuator_ctrlrange.T
     half, home = (hi - lo) / 2, base.model.key_qpos[0]
     step, pose = [], []

@@ -57,7 +57,7 @@ def test_the_label_is_the_planned_action_on_the_plan_and_pulls_back_off_it(env):
     assert np.all(np.asarray(env.feedforward(state.cursor)) == 0.0)
 
 
-def test_the_gain_scales_the_pull_and_a_teacher_needs_a_left_hand(env):
+def test_the_gain_scales_the_pull_and_a_teacher_labels_one_hand(env):
     lo, hi = env.model.actuator_ctrlrange.T
     plan = env.songs.plan
     half_gain = envs.make("left", [chord_song()], TEACHER, teacher_gain=0.5).base
@@ -81,11 +81,29 @@ def test_the_gain_scales_the_pull_and_a_teacher_needs_a_left_hand(env):
     half = (hi - lo) / 2
     np.testing.assert_allclose(d[[0, 15]], [0.1 * 0.1 / half[0], -0.03 * 0.5 / half[15]], rtol=1e-5)
     assert np.count_nonzero(d) == 2
-    with pytest.raises(ValueError, match="no left hand"):
-        envs.make("right", [chord_song()], TEACHER)
+    with pytest.raises(ValueError, match="not duet"):
+        envs.make("duet", [chord_song()], TEACHER)
     with pytest.raises(ValueError, match="teacher=True"):
         Trainer(TrainConfig(num_envs=4, horizon=4, minibatch=8, teacher_weight=1.0), [TL.from_song(chord_song())], None,
                 envs.EnvConfig(physics="jax"))
+
+
+def test_the_right_env_is_labelled_by_the_right_planner():
+    right = envs.make("right", [chord_song()], TEACHER).base
+    plan, half = right.songs.plan_right, (right.model.actuator_ctrlrange[:, 1] - right.model.actuator_ctrlrange[:, 0]) / 2
+    assert right.songs.plan is None                     # no left plan is made for a right-hand student
+    j = np.asarray(right.hands[0].qpos)
+    state = _at(right, 5, np.zeros(right.model.nq))
+    f = int(CU.song_frame(state.cursor))
+    q = np.zeros(right.model.nq, np.float32)
+    q[j] = np.asarray(plan.qpos[0, f])
+    np.testing.assert_allclose(np.asarray(right.teacher(_at(right, 5, q))), np.clip(np.asarray(plan.action[0, f]), -1, 1),
+                               atol=1e-7)
+    q[j[1]] += 0.02                                     # 2 cm off the plan on the wrist's second slide
+    expected = np.clip(np.asarray(plan.action[0, f]), -1, 1)
+    expected[1] = np.clip(plan.action[0, f][1] - 0.02 / half[1], -1, 1)
+    np.testing.assert_allclose(np.asarray(right.teacher(_at(right, 5, q))), expected, atol=1e-6)
+    assert np.all(np.asarray(right.feedforward(state.cursor)) == 0.0)
 
 
 def _update(trainer, labels, batch_size=64):

@@ -27,11 +27,13 @@ def make(hand: str, songs, config: EnvConfig | None = None, **overrides):
     if config.right_feedforward and "right" not in ENVS[hand].roles:
         raise ValueError(f"EnvConfig.right_feedforward is the right hand's planned motion; the {hand} env has no "
                          "right hand")
-    if config.teacher and "left" not in ENVS[hand].roles:
-        raise ValueError(f"EnvConfig.teacher labels the left hand from its planner; the {hand} env has no left hand")
+    if config.teacher and len(ENVS[hand].roles) != 1:
+        raise ValueError(f"EnvConfig.teacher labels one hand from its planner: the left or the right env, not {hand}")
     songs = planner.prepare(songs, config)
-    if config.teacher and songs.plan is None:           # the left plans, as labels only
+    if config.teacher and hand == "left" and songs.plan is None:          # the plans, as labels only
         songs = planner.attach(songs, config.rest_frames, config.mirror)
+    if config.teacher and hand == "right" and songs.plan_right is None:
+        songs = planner.attach(songs, config.rest_frames, config.mirror, hand="right")
     env = ENVS[hand](songs, config)
     return PlayThrough(env) if config.sequential else AutoReset(ChainWindows(env))
 

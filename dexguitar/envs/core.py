@@ -76,8 +76,9 @@ class EnvConfig:
     mirror: bool = False                 # the left-handed player's scene
     feedforward: bool = False            # the left action is a residual on the planner's (`planner.plans`)
     right_feedforward: bool = False      # the right action likewise, on the right planner's
-    teacher: bool = False                # the left planner's action for the hand's state in info["teacher"], not
-                                         # added to the action: a learned hand's labels (`TrainConfig.teacher_weight`)
+    teacher: bool = False                # the hand's planner's action for its state in info["teacher"] (the left or
+                                         # the right env), not added to the action: a learned hand's labels
+                                         # (`TrainConfig.teacher_weight`)
     teacher_gain: float = 1.0            # the label's pull back to the plan: planned action + gain x (planned joint
                                          # position - joint position) / half range
     teacher_damping: float = 0.0         # s: + this x (planned joint velocity - joint velocity) / half range on the
@@ -406,8 +407,9 @@ class GuitarEnv:
         """{role: `Plan`} of the hands that act on top of a planner's feedforward or learn from its labels (the
         songs' plans of those roles)."""
         cfg = self.config
-        found = {"left": self.songs.plan if cfg.feedforward or cfg.teacher else None,
-                 "right": self.songs.plan_right if cfg.right_feedforward else None}
+        alone = len(self.roles) == 1                      # a teacher labels a one-hand env's hand
+        found = {"left": self.songs.plan if cfg.feedforward or (cfg.teacher and alone) else None,
+                 "right": self.songs.plan_right if cfg.right_feedforward or (cfg.teacher and alone) else None}
         return {r: found[r] for r in self.roles if found[r] is not None}
 
     @property
@@ -421,20 +423,20 @@ class GuitarEnv:
         hand has no feedforward."""
         out, song = jnp.zeros(self.action_size), cursor.window.song
         for role, plan in self.plans.items():
-            if role == "left" and not self.config.feedforward:       # a teacher's plan only labels
-                continue
+            if not (self.config.feedforward if role == "left" else self.config.right_feedforward):
+                continue                                             # a teacher's plan only labels
             ff = plan.action[song, jnp.clip(CU.song_frame(cursor), 0, plan.frames[song] - 1)]
             i = self.roles.index(role) * H.N_DOF
             out = out.at[i:i + H.N_DOF].set(ff)
         return out
 
     def teacher(self, state: State):
-        """(27,) the left planner's action for this state: the planned action of the song frame plus the PD target
+        """(27,) the hand's planner's action for this state (a one-hand env): the planned action of the song frame plus the PD target
         offset that pulls the hand back to the planned pose (`EnvConfig.teacher_gain`). The plan's PD targets alone
         already pull toward the plan at the PD's own rate; the gain stiffens that pull where the hand strayed, and
         `teacher_damping` / `teacher_finger_damping` damp the lightly damped wrist and fingers through the target.
         DAgger's expert: it labels any state a student visits, not only the planned ones."""
-        cfg, plan, song, i = self.config, self.plans["left"], state.cursor.window.song, self.roles.index("left")
+        cfg, plan, song, i = self.config, self.plans[self.roles[0]], state.cursor.window.song, 0
         f = jnp.clip(CU.song_frame(state.cursor), 0, plan.frames[song] - 1)
         j = jnp.asarray(self.hands[i].qpos)
         q, v = state.body.data.qpos[j], state.body.data.qvel[j]
