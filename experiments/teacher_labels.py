@@ -95,25 +95,35 @@ def label_fn(env, name: str):
     return label
 
 
+def rollout(env, act, envs: int, steps: int, key, noise=0.0, record=None):
+    """Per step and env (steps, envs, ...): `act(state)` plus `noise` x N(0, 1) (a scalar or one per joint) driving
+    the env's hand on training windows; the closed notes' F1, whether each counts, terminations, and
+    `record(state, action)` of the state acted in. `key`: (the resets' key, the noise's key), or one key split into
+    them. Traced inside the caller's jit."""
+    hand = env.base.roles[0]
+    k0, k1 = key if isinstance(key, tuple) else jax.random.split(key)
+    s = jax.vmap(env.reset)(jax.random.split(k0, envs))
+
+    def one(s, k):
+        a = jax.vmap(act)(s)
+        rec = jax.vmap(record)(s, a) if record else {}
+        s = jax.vmap(env.step)(s, a + noise * jax.random.normal(k, a.shape))
+        sc = s.info[hand]
+        rec.update(f1=sc[:, 2], counted=s.info["note_end"] & (sc[:, 4] + sc[:, 5] > 0), terminated=s.terminated)
+        return s, rec
+    return jax.lax.scan(one, s, jax.random.split(k1, steps))[1]
+
+
 def play(env, label, envs: int, steps: int, noises=(0.0,), on: str = "all"):
     """[(per-note F1, notes, terminations)] of `label` plus noise x N(0, 1) on the joints `on` (NOISE_ON) driving the
     env's hand on training windows, for each noise of `noises` (one program for all)."""
-    hand = env.base.roles[0]
     mask = jnp.where(is_wrist(), *NOISE_ON[on]).astype(jnp.float32)
 
+    @jax.jit
     def run(key, noise):
-        k0, k1 = jax.random.split(key)
-        s = jax.vmap(env.reset)(jax.random.split(k0, envs))
-
-        def one(s, k):
-            a = jax.vmap(label)(s)
-            s = jax.vmap(env.step)(s, a + noise * mask * jax.random.normal(k, a.shape))
-            sc = s.info[hand]
-            counted = (s.info["note_end"] & (sc[:, 4] + sc[:, 5] > 0)).astype(jnp.float32)
-            return s, (jnp.sum(sc[:, 2] * counted), jnp.sum(counted), jnp.sum(s.terminated))
-        _, (f1, n, t) = jax.lax.scan(one, s, jax.random.split(k1, steps))
-        return f1.sum() / n.sum(), n.sum(), t.sum()
-    run = jax.jit(run)
+        rec = rollout(env, label, envs, steps, key, noise * mask)
+        counted = rec["counted"].astype(jnp.float32)
+        return jnp.sum(rec["f1"] * counted) / counted.sum(), counted.sum(), rec["terminated"].sum()
     return [[float(x) for x in run(jax.random.PRNGKey(0), jnp.float32(noise))] for noise in noises]
 
 
@@ -134,20 +144,11 @@ def collect(env, envs: int, steps: int, noise: float, key):
     plus `noise` x N(0, 1)."""
     base = env.base
 
-    def features(s):
+    def features(s, _):
         return dict(seen(base, s), label=base.teacher(s), song=s.cursor.window.song)
-
-    def run(key):
-        k0, k1 = jax.random.split(key)
-        s = jax.vmap(env.reset)(jax.random.split(k0, envs))
-
-        def one(s, k):
-            rec = jax.vmap(features)(s)
-            a = rec["label"] + noise * jax.random.normal(k, rec["label"].shape)
-            return jax.vmap(env.step)(s, a), rec
-        return jax.lax.scan(one, s, jax.random.split(k1, steps))[1]
-    out = jax.jit(run)(key)
-    return {k: np.asarray(v).reshape(envs * steps, -1) for k, v in out.items()}
+    out = jax.jit(lambda key: rollout(env, base.teacher, envs, steps, key, noise, features))(key)
+    return {k: np.asarray(out[k]).reshape(envs * steps, -1) for k in ("obs", "joints", "plan", "plan-wrist",
+                                                                       "plan-fingers", "label", "song")}
 
 
 def inputs(rec, name: str, xp=np):
@@ -232,20 +233,10 @@ def drive(env, act, envs: int, steps: int):
     from dexguitar.music import cursor as CU
     base = env.base
 
-    def run(key):
-        s = jax.vmap(env.reset)(jax.random.split(key, envs))
-
-        def one(s, _):
-            a = jax.vmap(act)(s)
-            rec = {"err": a - jax.vmap(base.teacher)(s), "goal": jax.vmap(lambda c: CU.current(c)[0])(s.cursor),
-                   "note_frame": s.cursor.note_frame}
-            s = jax.vmap(env.step)(s, a)
-            sc = s.info["left"]
-            rec.update(f1=sc[:, 2], counted=s.info["note_end"] & (sc[:, 4] + sc[:, 5] > 0),
-                       terminated=s.terminated)
-            return s, rec
-        return jax.lax.scan(one, s, None, length=steps)[1]
-    return jax.tree.map(np.asarray, jax.jit(run)(jax.random.PRNGKey(0)))
+    def record(s, a):
+        return {"err": a - base.teacher(s), "goal": CU.current(s.cursor)[0], "note_frame": s.cursor.note_frame}
+    key = jax.random.PRNGKey(0)
+    return jax.tree.map(np.asarray, jax.jit(lambda key: rollout(env, act, envs, steps, (key, key), 0.0, record))(key))
 
 
 def f1_by_kind(rec) -> dict:
