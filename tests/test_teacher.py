@@ -106,6 +106,22 @@ def test_the_right_env_is_labelled_by_the_right_planner():
     assert np.all(np.asarray(right.feedforward(state.cursor)) == 0.0)
 
 
+def test_the_planned_wrist_reward_is_one_on_the_planned_hand_position_and_needs_the_plans(env):
+    plan = env.songs.plan
+    state = _at(env, 4, np.zeros(env.model.nq))
+    f = int(CU.song_frame(state.cursor)) + 1                   # the pose after this step: the next frame's
+    q = np.asarray(plan.qpos[0, f]).copy()
+    q[6:] += 0.3                                               # the fingers and wrist hinges do not count
+    assert float(env.plan_wrist(state, SimpleNamespace(qpos=jnp.asarray(q)))) == pytest.approx(1.0, abs=1e-6)
+    q[0] += 0.012                                              # 1.2 cm and 1.6 cm off on two slides: 2 cm
+    q[2] -= 0.016
+    assert float(env.plan_wrist(state, SimpleNamespace(qpos=jnp.asarray(q)))) == pytest.approx(np.exp(-1.0), rel=1e-4)
+    with pytest.raises(ValueError, match="needs the left plans"):
+        envs.make("left", [chord_song()], envs.EnvConfig(physics="jax", plan_wrist_reward=0.1))
+    with pytest.raises(ValueError, match="needs the left plans"):
+        envs.make("right", [chord_song()], TEACHER, plan_wrist_reward=0.1)
+
+
 def _update(trainer, labels, batch_size=64):
     """update(iteration) -> (mean action before, after, log): one `ppo_update` (one compiled program) of a fresh actor
     on a batch whose advantages are all zero (PPO's own loss has no gradient), every sample labelled `labels`; the

@@ -86,6 +86,9 @@ class EnvConfig:
                                          # the label playing through a student's errors (docs/results.md)
     margin_reward: float = 0.0           # not in the paper: added to each string's column times its press margin
                                          # (`rewards.margin_reward`), a smooth measure of how robustly it plays
+    plan_wrist_reward: float = 0.0       # not in the paper: added to each string's column times the closeness of the
+                                         # left wrist to the planner's hand position (`rewards.plan_wrist_reward`);
+                                         # needs the left plans (`teacher` or `feedforward`)
     physics: str = "auto"                # MJX's "jax" or "warp" implementation; "auto": Warp on a GPU where warp-lang
                                          # is installed, else JAX (`world.physics.resolve`)
     warp_envs: int = 4096                # Warp: the most envs stepped at once; its contact buffer, which all envs
@@ -446,6 +449,14 @@ class GuitarEnv:
                                         + damping * (plan.qvel[song, f] - v)) / half
         return jnp.clip(label, -1.0, 1.0)
 
+    def plan_wrist(self, state: State, data):
+        """`rewards.plan_wrist_reward` of the left hand after this step (`data`), against the planned hand position of
+        the next song frame (a plan's pose is the one at the start of its frame)."""
+        plan, song, i = self.plans["left"], state.cursor.window.song, self.roles.index("left")
+        f = jnp.clip(CU.song_frame(state.cursor) + 1, 0, plan.frames[song] - 1)
+        slides = jnp.asarray(self.hands[i].qpos[:3])
+        return R.plan_wrist_reward(data.qpos[slides], plan.qpos[song, f, :3])
+
     @property
     def picks(self) -> bool:
         """Does this env pick strings (is there a right hand)?"""
@@ -471,6 +482,8 @@ class GuitarEnv:
         columns, correct = R.left_reward(seg, goal_left, press, energy, self.guitar)
         if self.config.margin_reward:
             columns = columns + self.config.margin_reward * R.margin_reward(seg, goal_left, self.guitar)
+        if self.config.plan_wrist_reward:
+            columns = columns + self.config.plan_wrist_reward * self.plan_wrist(state, data)
         thumb = self.to_guitar(data.site_xpos[self.hands[i].thumb_tip])
         return columns, correct, press, tips, R.left_failed(body.links[i, 0, :3], seg, thumb, self.guitar)
 

@@ -109,6 +109,20 @@ def margin_reward(segments, goal, guitar: Guitar = GUITAR):
     return jnp.clip(press_margins(segments, goal, guitar) / MARGIN_SCALE, -1.0, 1.0)
 
 
+PLAN_WRIST_SCALE = 0.02       # m: the planned-wrist reward is exp(-1) at 2 cm from the planned hand position
+
+
+def plan_wrist_reward(slides, planned_slides):
+    """() in (0, 1]: exp(-(d / PLAN_WRIST_SCALE)^2), d the distance of the wrist's three slide joints (the hand's
+    position) from the planner's.
+
+    Not in the paper. A hand trained from its home pose by Eq. 7 alone learns last the notes far from home (frets
+    1-3, docs/results.md); the planner's hand position says where on the neck each note is played, and unlike the
+    planner's actions (a controller's output that a student cannot predict closely enough to play) it is a smooth
+    function of the notes. The fingers, and with them the choice of finger, stay with Eq. 3-7."""
+    return jnp.exp(-jnp.sum((slides - planned_slides) ** 2) / PLAN_WRIST_SCALE ** 2)
+
+
 def hand_energy(wrist_velocity, tip_velocities):
     """Eq. 8: exp(-(|v_w| + 0.1 sum_f |v_f|)^2); fingertip velocities relative to the wrist, in its frame."""
     speed = jnp.linalg.norm(wrist_velocity) + 0.1 * jnp.sum(jnp.linalg.norm(tip_velocities, axis=-1))

@@ -39,7 +39,7 @@ RESUME_FREE = ("iterations", "iterations_per_call")   # may change on --resume; 
 TRAIN_DEFAULTS = {f.name: f.default for f in dataclasses.fields(TrainConfig)}
 # EnvConfig fields newer than the runs that lack them, with the value those runs had (their envs ran MJX's JAX physics)
 ENV_ADDED = {"physics": "auto", "warp_envs": 4096, "teacher": False, "teacher_gain": 1.0, "teacher_damping": 0.0,
-             "teacher_finger_damping": 0.0}
+             "teacher_finger_damping": 0.0, "plan_wrist_reward": 0.0}
 KEPT = ("params", "obs_norm", "disc_norm", "popart", "key", "iteration")
 
 
