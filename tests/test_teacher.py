@@ -90,17 +90,18 @@ def test_the_gain_scales_the_pull_and_a_teacher_labels_one_hand(env):
 
 def test_the_right_env_is_labelled_by_the_right_planner():
     right = envs.make("right", [chord_song()], TEACHER).base
-    plan, half = right.songs.plan_right, (right.model.actuator_ctrlrange[:, 1] - right.model.actuator_ctrlrange[:, 0]) / 2
+    lo, hi = right.model.actuator_ctrlrange.T
+    plan, half = right.songs.plan_right, (hi - lo) / 2
     assert right.songs.plan is None                     # no left plan is made for a right-hand student
     j = np.asarray(right.hands[0].qpos)
     state = _at(right, 5, np.zeros(right.model.nq))
     f = int(CU.song_frame(state.cursor))
     q = np.zeros(right.model.nq, np.float32)
     q[j] = np.asarray(plan.qpos[0, f])
-    np.testing.assert_allclose(np.asarray(right.teacher(_at(right, 5, q))), np.clip(np.asarray(plan.action[0, f]), -1, 1),
-                               atol=1e-7)
+    planned = np.clip(np.asarray(plan.action[0, f]), -1, 1)
+    np.testing.assert_allclose(np.asarray(right.teacher(_at(right, 5, q))), planned, atol=1e-7)
     q[j[1]] += 0.02                                     # 2 cm off the plan on the wrist's second slide
-    expected = np.clip(np.asarray(plan.action[0, f]), -1, 1)
+    expected = planned.copy()
     expected[1] = np.clip(plan.action[0, f][1] - 0.02 / half[1], -1, 1)
     np.testing.assert_allclose(np.asarray(right.teacher(_at(right, 5, q))), expected, atol=1e-6)
     assert np.all(np.asarray(right.feedforward(state.cursor)) == 0.0)

@@ -434,11 +434,11 @@ class GuitarEnv:
         return out
 
     def teacher(self, state: State):
-        """(27,) the hand's planner's action for this state (a one-hand env): the planned action of the song frame plus the PD target
-        offset that pulls the hand back to the planned pose (`EnvConfig.teacher_gain`). The plan's PD targets alone
-        already pull toward the plan at the PD's own rate; the gain stiffens that pull where the hand strayed, and
-        `teacher_damping` / `teacher_finger_damping` damp the lightly damped wrist and fingers through the target.
-        DAgger's expert: it labels any state a student visits, not only the planned ones."""
+        """(27,) the hand's planner's action for this state (a one-hand env): the planned action of the song frame
+        plus the PD target offset that pulls the hand back to the planned pose (`EnvConfig.teacher_gain`). The plan's
+        PD targets alone already pull toward the plan at the PD's own rate; the gain stiffens that pull where the hand
+        strayed, and `teacher_damping` / `teacher_finger_damping` damp the lightly damped wrist and fingers through
+        the target. DAgger's expert: it labels any state a student visits, not only the planned ones."""
         cfg, plan, song, i = self.config, self.plans[self.roles[0]], state.cursor.window.song, 0
         f = jnp.clip(CU.song_frame(state.cursor), 0, plan.frames[song] - 1)
         j = jnp.asarray(self.hands[i].qpos)
