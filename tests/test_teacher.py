@@ -112,7 +112,7 @@ def test_the_planned_wrist_reward_is_one_on_the_planned_hand_position_and_needs_
     state = _at(env, 4, np.zeros(env.model.nq))
     f = int(CU.song_frame(state.cursor)) + 1                   # the pose after this step: the next frame's
     q = np.asarray(plan.qpos[0, f]).copy()
-    q[6:] += 0.3                                               # the fingers and wrist hinges do not count
+    q[3:] += 0.3                                               # the wrist's hinges and the fingers do not count
     assert float(env.plan_wrist(state, SimpleNamespace(qpos=jnp.asarray(q)))) == pytest.approx(1.0, abs=1e-6)
     q[0] += 0.012                                              # 1.2 cm and 1.6 cm off on two slides: 2 cm
     q[2] -= 0.016

@@ -29,16 +29,13 @@ def make(hand: str, songs, config: EnvConfig | None = None, **overrides):
                          "right hand")
     if config.teacher and len(ENVS[hand].roles) != 1:
         raise ValueError(f"EnvConfig.teacher labels one hand from its planner: the left or the right env, not {hand}")
-    if config.plan_wrist_reward and not ("left" in ENVS[hand].roles and (config.feedforward or
-                                                                      (config.teacher and hand == "left"))):
+    songs = planner.prepare(songs, config)
+    if config.teacher and (songs.plan if hand == "left" else songs.plan_right) is None:   # the plans, as labels only
+        songs = planner.attach(songs, config.rest_frames, config.mirror, hand=hand)
+    env = ENVS[hand](songs, config)
+    if config.plan_wrist_reward and "left" not in env.plans:
         raise ValueError("EnvConfig.plan_wrist_reward rewards the left hand for the planner's hand position: it needs "
                          "the left plans, as a teacher's (the left env) or a feedforward's")
-    songs = planner.prepare(songs, config)
-    if config.teacher and hand == "left" and songs.plan is None:          # the plans, as labels only
-        songs = planner.attach(songs, config.rest_frames, config.mirror)
-    if config.teacher and hand == "right" and songs.plan_right is None:
-        songs = planner.attach(songs, config.rest_frames, config.mirror, hand="right")
-    env = ENVS[hand](songs, config)
     return PlayThrough(env) if config.sequential else AutoReset(ChainWindows(env))
 
 
