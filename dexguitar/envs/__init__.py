@@ -29,9 +29,7 @@ def make(hand: str, songs, config: EnvConfig | None = None, **overrides):
                          "right hand")
     if config.teacher and len(ENVS[hand].roles) != 1:
         raise ValueError(f"EnvConfig.teacher labels one hand from its planner: the left or the right env, not {hand}")
-    songs = planner.prepare(songs, config)
-    if config.teacher and (songs.plan if hand == "left" else songs.plan_right) is None:   # the plans, as labels only
-        songs = planner.attach(songs, config.rest_frames, config.mirror, hand=hand)
+    songs = planner.prepare(songs, config, hand)
     env = ENVS[hand](songs, config)
     if config.plan_wrist_reward and "left" not in env.plans:
         raise ValueError("EnvConfig.plan_wrist_reward rewards the left hand for the planner's hand position: it needs "

@@ -243,7 +243,7 @@ def evaluate(params: dict, spec: PolicySpec, songs, env_config=None, hand: str |
     results = {}
     for start in range(0, len(songs), size):
         part = songs[start:start + size]
-        batch = planner.prepare(TL.batch(timelines[start:start + size]), cfg)
+        batch = planner.prepare(TL.batch(timelines[start:start + size]), cfg, hand)
         # a song plays its frames after the count-in; rounded up so song sets of about one length share a program
         frames = max(int(t.n_frames) for t in timelines[start:start + size]) + cfg.rest_frames + 1
         record_steps = -(-frames // RECORD_ROUND) * RECORD_ROUND if record else 0

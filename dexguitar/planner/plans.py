@@ -304,13 +304,16 @@ def attach(songs, rest_frames: int = 5, mirror: bool = False, workers: int = 0, 
     return songs.replace(plan=plan) if hand == "left" else songs.replace(plan_right=plan)
 
 
-def prepare(songs, config):
-    """Songs (a list of `Song`s or timelines, or a batch) as an env of `config` (an `EnvConfig` or None) reads them:
-    stacked, with the plans attached where `config.feedforward` or `config.right_feedforward` asks for them."""
+def prepare(songs, config, hand: str):
+    """Songs (a list of `Song`s or timelines, or a batch) as the `hand` env of `config` (an `EnvConfig` or None)
+    reads them: stacked, with the plans attached where `config.feedforward` or `config.right_feedforward` asks for
+    them, and the plan of a one-hand env's own hand where `config.teacher` labels it."""
     songs = TL.as_batch(songs)
-    if config is not None and config.feedforward and songs.plan is None:
+    if config is None:
+        return songs
+    if (config.feedforward or (config.teacher and hand == "left")) and songs.plan is None:
         songs = attach(songs, config.rest_frames, config.mirror)
-    if config is not None and config.right_feedforward and songs.plan_right is None:
+    if (config.right_feedforward or (config.teacher and hand == "right")) and songs.plan_right is None:
         songs = attach(songs, config.rest_frames, config.mirror, hand="right", after=left_plans(songs, config))
     return songs
 
