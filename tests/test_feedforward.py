@@ -24,7 +24,6 @@ from dexguitar.music import cursor as CU
 from dexguitar.music import timeline as TL
 from dexguitar.perform.evaluate import evaluate
 from test_scripted import MELODY, fast_lines, melody
-from test_sync import one_song_at_a_time
 
 
 @pytest.fixture(scope="module")
@@ -37,6 +36,20 @@ def plans(tmp_path_factory, monkeypatch_module):
 def monkeypatch_module():
     with pytest.MonkeyPatch.context() as mp:
         yield mp
+
+
+def one_song_at_a_time(monkeypatch, params, spec, limit: str, song):
+    """`song` evaluated twice in one call and once alone, with the CPU's songs per program (`limit`) set to 1:
+    (two, one). Both calls take the one-song program and each copy scores exactly as the song alone."""
+    from dexguitar.perform import evaluate as EV
+    monkeypatch.setattr(EV, limit, 1)
+    monkeypatch.setattr(EV, "_CACHE", {})
+    two = EV.evaluate(params, spec, [song, song])
+    one = EV.evaluate(params, spec, [song])
+    assert len(EV._CACHE) == 1                                  # a single program, of one song's shape
+    assert list(two) == [song.title, f"{song.title} (1)"] and list(one) == [song.title]
+    assert two[song.title] == one[song.title] == two[f"{song.title} (1)"]
+    return two, one
 
 
 def zero_residual(env, hand: str = "left") -> tuple[dict, PO.PolicySpec]:

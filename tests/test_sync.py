@@ -109,24 +109,11 @@ def test_a_scaled_left_hand_acts_at_its_scale_alone_and_in_the_duet(pair, tmp_pa
         check_init(tmp_path / "scaled", "left", 9)
 
 
-def one_song_at_a_time(monkeypatch, params, spec, limit: str, song):
-    """`song` evaluated twice in one call and once alone, with the CPU's songs per program (`limit`) set to 1:
-    (two, one). Both calls take the one-song program and each copy scores exactly as the song alone."""
-    from dexguitar.perform import evaluate as EV
-    monkeypatch.setattr(EV, limit, 1)
-    monkeypatch.setattr(EV, "_CACHE", {})
-    two = EV.evaluate(params, spec, [song, song])
-    one = EV.evaluate(params, spec, [song])
-    assert len(EV._CACHE) == 1                                  # a single program, of one song's shape
-    assert list(two) == [song.title, f"{song.title} (1)"] and list(one) == [song.title]
-    assert two[song.title] == one[song.title] == two[f"{song.title} (1)"]
-    return two, one
-
-
 def test_a_cpu_plays_the_duet_a_few_songs_at_a_time(tmp_path, monkeypatch):
     """Five or six songs in one duet program stalled XLA's CPU run on a 2-core machine, so a CPU plays the duet
     `CPU_DUET_SONGS` songs at a time. Here one at a time, with the shipped general pair: two songs take the
-    one-song program, each scores exactly as it does alone, and songs of one title keep apart by their place."""
+    one-song program, the first scores exactly as it does alone, and two songs of one title keep apart by their
+    place. Songs not planned yet are planned together, in one pool of planner processes, before the first plays."""
     from dexguitar.cli import POLICIES
     from dexguitar.planner import plans as FF
     from dexguitar.music import load_song
@@ -134,19 +121,20 @@ def test_a_cpu_plays_the_duet_a_few_songs_at_a_time(tmp_path, monkeypatch):
     from dexguitar.perform.play import pair as general_pair
     params, spec = general_pair(POLICIES / "left_general", POLICIES / "right_mixed")
     (tmp_path / "tiny.txt").write_text(TINY_SONG)
-    song = load_song(tmp_path / "tiny.txt")
-    two, one = one_song_at_a_time(monkeypatch, params, spec, "CPU_DUET_SONGS", song)
-    assert two[song.title]["summary"]["both"]["notes"] == 3                  # two notes and a chord, all judged
-    # songs not planned yet are planned together, in one pool of planner processes, before the first chunk plays
-    (tmp_path / "other.txt").write_text(TINY_SONG.replace("B|----1", "B|----3"))
-    other = load_song(tmp_path / "other.txt")
+    (tmp_path / "other.txt").write_text(TINY_SONG.replace("B|----1", "B|----3"))      # the same title
+    song, other = load_song(tmp_path / "tiny.txt"), load_song(tmp_path / "other.txt")
+    monkeypatch.setattr(EV, "CPU_DUET_SONGS", 1)
+    monkeypatch.setattr(EV, "_CACHE", {})
+    one = EV.evaluate(params, spec, [song])
+    assert one[song.title]["summary"]["both"]["notes"] == 3                  # two notes and a chord, all judged
     monkeypatch.setenv("DEXGUITAR_PLANS", str(tmp_path / "plans"))
     pools = []
     plan_all = FF.plan_all
     monkeypatch.setattr(FF, "plan_all", lambda jobs, *a, **k: pools.append(len(jobs)) or plan_all(jobs, *a, **k))
-    mixed = EV.evaluate(params, spec, [song, other])
-    assert pools == [2] and len(EV._CACHE) == 1
-    assert mixed[song.title] == one[song.title] and mixed[f"{song.title} (1)"] != one[song.title]
+    two = EV.evaluate(params, spec, [song, other])
+    assert pools == [2] and len(EV._CACHE) == 1                 # one pool; a single program, of one song's shape
+    assert list(two) == [song.title, f"{song.title} (1)"]
+    assert two[song.title] == one[song.title] and two[f"{song.title} (1)"] != one[song.title]
 
 
 def test_pair_is_checked(pair):

@@ -236,16 +236,18 @@ class GuitarEnv:
 
     @functools.cached_property
     def layout(self) -> ObsLayout:
-        """The observation layout, from the shapes `reset` produces (traced on first use: a player that only
-        rolls out does without it)."""
-        state = jax.eval_shape(self.reset, jax.random.PRNGKey(0))
-        goals = [jax.eval_shape(functools.partial(self.hand_goal, role), state.cursor, state.picking)
-                 for role in self.roles]
+        """The observation layout, from the shapes of what `reset` observes: the link features and each hand's goal
+        at a window's start. Traced on first use and without the physics (the kinematics would be a second of
+        tracing per env); tests/test_envs.py checks it against the observation `reset` returns."""
+        def pieces(key):
+            links = jnp.zeros((len(self.hands), len(H.KEY_LINKS), 7))
+            cursor, picking = CU.start(self.sample_window(key)), self.first_picking(jnp.zeros(3))
+            return self.link_features(links, links), [self.hand_goal(role, cursor, picking) for role in self.roles]
+        frame, goals = jax.eval_shape(pieces, jax.random.PRNGKey(0))
         if len({g.shape for g in goals}) != 1:
             raise ValueError(f"hands with goals of different sizes: {[g.shape for g in goals]}")
-        return ObsLayout(roles=self.roles, history=state.body.hist.shape[0],
-                         frame=state.body.hist.shape[1] // len(self.roles), goal=goals[0].shape[0],
-                         privileged=state.privileged.shape[0])
+        return ObsLayout(roles=self.roles, history=HISTORY, frame=frame.shape[0] // len(self.roles),
+                         goal=goals[0].shape[0], privileged=N_STRINGS)
 
     # ------------------------------------------------------------------------ observation pieces
     def link_states(self, data):
@@ -335,13 +337,16 @@ class GuitarEnv:
         pick = self.pick_point(data) if "right" in self.roles else jnp.zeros(3)
         body = Body(data=data, links=links, link_hist=jnp.stack([links] * 3), hist=jnp.stack([feats] * HISTORY),
                     tips=tips)
-        cursor = CU.start(window)
-        picking = Picking(done=jnp.zeros(N_STRINGS, bool), clean=jnp.ones(N_STRINGS, bool),
-                          path=jnp.stack([pick, pick]))
+        cursor, picking = CU.start(window), self.first_picking(pick)
         return State(body=body, cursor=cursor, picking=picking, tally=scoring.empty_tally(),
                      obs=self.observe(body, cursor, picking), privileged=jnp.ones(N_STRINGS),
                      reward=jnp.zeros(len(self.reward_columns)), done=jnp.bool_(False),
                      terminated=jnp.bool_(False), lifetime=jnp.int32(0), key=k_next, info=self.empty_info())
+
+    @staticmethod
+    def first_picking(pick) -> Picking:
+        """Nothing picked yet, the pick at rest at `pick`."""
+        return Picking(done=jnp.zeros(N_STRINGS, bool), clean=jnp.ones(N_STRINGS, bool), path=jnp.stack([pick, pick]))
 
     def empty_info(self):
         z = jnp.zeros(6, jnp.float32)
