@@ -157,3 +157,41 @@ def test_a_run_made_before_the_physics_fields_resumes_under_jax_alone(tmp_path):
             run.check_resume({"train": {"hand": "left"}, "env": dict(env, physics="warp", warp_envs=64)})
     finally:
         run.close()
+
+
+# Warp's buffers outside the env batch, on a stand-in for Warp's Data: `fills` and `refill` as an env's reset uses them
+WARP_STANDIN = """
+import dataclasses, hashlib, sys
+import jax, jax.numpy as jnp
+from mujoco.mjx.warp.types import DATA_NON_VMAP
+from dexguitar.world import physics as P
+
+Impl = dataclasses.make_dataclass("Impl", sorted(DATA_NON_VMAP))
+Impl.replace = dataclasses.replace
+Data = dataclasses.make_dataclass("Data", ["impl", "_impl"])
+Data.replace = dataclasses.replace
+data = Data(impl=P.mjx.Impl.WARP, _impl=Impl(**{n: jnp.full((3, i + 2), i, jnp.int32) for i, n in
+                                                enumerate(sorted(DATA_NON_VMAP))}))
+fills = P.fills(data)
+text = jax.jit(lambda: dataclasses.asdict(P.refill(data, fills)._impl)).lower().as_text()
+print(",".join(fills), hashlib.sha256(text.encode()).hexdigest())
+"""
+
+
+def test_warp_buffers_are_made_in_one_order_in_every_process():
+    """MJX names Warp's shared buffers in a set, whose order follows Python's string hashing, which changes from
+    process to process. A reset made them in that order, so each run lowered another program, which JAX's persistent
+    cache did not serve: a later run under Warp compiled its training chunk again. Two processes with other hash
+    seeds make the same program, the buffers in sorted order."""
+    import os
+    import subprocess
+    import sys
+    from mujoco.mjx.warp.types import DATA_NON_VMAP
+    outs = set()
+    for seed in ("1", "2"):
+        done = subprocess.run([sys.executable, "-c", WARP_STANDIN], env=dict(os.environ, PYTHONHASHSEED=seed,
+                              JAX_PLATFORMS="cpu"), capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0, done.stderr[-2000:]
+        outs.add(done.stdout.strip().splitlines()[-1])
+    assert len(outs) == 1, outs
+    assert outs.pop().split()[0].split(",") == sorted(DATA_NON_VMAP)

@@ -148,9 +148,11 @@ def put(model: mujoco.MjModel, data: mujoco.MjData, physics: str, envs: int, dev
     return mjx_model, mjx.put_data(model, data, impl=physics, device=device, **warp_sizes(model, envs))
 
 
-def shared(data) -> set:
-    """Names of the fields of `data._impl` that Warp keeps outside the env batch (none under JAX)."""
-    return set(DATA_NON_VMAP) if data.impl == mjx.Impl.WARP else set()
+def shared(data) -> tuple:
+    """Names of the fields of `data._impl` that Warp keeps outside the env batch (none under JAX), sorted: MJX keeps
+    them in a set, whose order changes from process to process (string hashing), and a program that makes them in
+    that order (`refill`) would be another program for JAX's persistent cache in every run."""
+    return tuple(sorted(DATA_NON_VMAP)) if data.impl == mjx.Impl.WARP else ()
 
 
 def fills(data) -> dict:
