@@ -161,7 +161,7 @@ def test_a_run_made_before_the_physics_fields_resumes_under_jax_alone(tmp_path):
 
 # Warp's buffers outside the env batch, on a stand-in for Warp's Data: `fills` and `refill` as an env's reset uses them
 WARP_STANDIN = """
-import dataclasses, hashlib, sys
+import dataclasses, hashlib
 import jax, jax.numpy as jnp
 from mujoco.mjx.warp.types import DATA_NON_VMAP
 from dexguitar.world import physics as P
