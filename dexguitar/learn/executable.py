@@ -7,7 +7,8 @@
   package versions, devices, XLA flags, config and shapes loads it without tracing or lowering it: ready 10.1 s after
   the trainer was built instead of 24.3 s (docs/benchmarks.md, "Compilation"). A later run in the same process
   reuses it. Under Warp (`EnvConfig.physics`) no file is kept: the chunk is traced and lowered every run, and JAX's
-  persistent cache spares its compile (on one H200 a later run's chunk was ready in 12 s instead of 34 s).
+  persistent cache spares its compile (on an H200 a later run's chunk was ready in 8.3-12.9 s, a first run's in
+  33.6-46.2 s: docs/benchmarks.md, "A later run under Warp").
 
 The file's key hashes everything the program is made of except the values of its arguments (songs, reference
 motion, frozen policies): the package's files, the versions, the devices, the trainer's config (but the seed and
