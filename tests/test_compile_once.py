@@ -75,7 +75,6 @@ class StubTrainer:
 
 class StubEnv:
     config = StubConfig(0.0)
-    physics = "jax"
 
 
 STUB_RUN = """

@@ -6,9 +6,10 @@
 - The compiled chunk is kept on disk beside JAX's persistent cache (`<cache>/chunks/`). A later run of the same code,
   package versions, devices, XLA flags, config and shapes loads it without tracing or lowering it: ready 10.1 s after
   the trainer was built instead of 24.3 s (docs/benchmarks.md, "Compilation"). A later run in the same process
-  reuses it. Under Warp (`EnvConfig.physics`) no file is kept: the chunk is traced and lowered every run, and JAX's
-  persistent cache spares its compile (on an H200 a later run's chunk was ready in 8.3-12.9 s, a first run's in
-  33.6-46.2 s: docs/benchmarks.md, "A later run under Warp").
+  reuses it. Under Warp (`EnvConfig.physics`) the file also keeps the Warp calls the program names
+  (`world.warp_calls`), described again before it loads (on an H200 a later run's chunk was ready in 4.5-7.0 s:
+  docs/benchmarks.md, "A first and a later run under Warp"); where this process cannot serve them, the chunk is
+  traced and JAX's persistent cache spares its compile.
 
 The file's key hashes everything the program is made of except the values of its arguments (songs, reference
 motion, frozen policies): the package's files, the versions, the devices, the trainer's config (but the seed and
@@ -36,12 +37,14 @@ import jax
 from jax.experimental import serialize_executable
 
 from dexguitar.learn.policy import PolicySpec
+from dexguitar.learn.tracing import fresh_trace
+from dexguitar.world import warp_calls
 
 # TrainConfig fields that the chunk does not read: the first state's key, the run's length. A second seed or a longer
 # run loads the chunk file of the first.
 OUTSIDE_THE_CHUNK = ("seed", "iterations")
-PACKAGES = ("jax", "jaxlib", "jax-cuda12-plugin", "jax-cuda13-plugin", "mujoco", "mujoco-mjx", "flax", "optax",
-            "numpy")
+PACKAGES = ("jax", "jaxlib", "jax-cuda12-plugin", "jax-cuda13-plugin", "mujoco", "mujoco-mjx", "warp-lang", "flax",
+            "optax", "numpy")
 KEEP = 4            # chunk files kept in the cache directory, the newest first
 NO_RESAVE = ("cpu",)    # backends whose executables loaded from JAX's persistent cache are not kept (`_HITS`)
 LOAD_EVENT = "/dexguitar/chunk/load_duration"     # beside JAX's compile events, for those who count them
@@ -129,30 +132,54 @@ class ChunkBuild:
         self.log = log
         self._lower = lambda: trainer.make_train_chunk(n, where).lower(state, data)
         self._devices = list(where.mesh.devices.flat)
+        self._warp = {}                             # the Warp calls of the traced program (`warp_calls.taken`)
         self.key = key(trainer, where, n, (state, data))
-        # Under Warp no file: the program's Warp calls name FFI targets and call descriptors that only a trace in
-        # this process registers (`warp.jax_callable`), so it is traced, lowered and compiled every run, and JAX's
-        # persistent cache, keyed on the traced program, spares the compile
-        folder = directory() if jax.process_count() == 1 and trainer.env.physics != "warp" else None
+        folder = directory() if jax.process_count() == 1 else None
         self.path = folder / f"chunk-{self.key}.exe" if folder else None
         self._pool = concurrent.futures.ThreadPoolExecutor(1)
+        saved = self._read() if self.key not in _LIVE and self.path is not None and self.path.exists() else None
         if self.key in _LIVE:
             self.how = "reused"
             self._future = _submit(self._pool, _LIVE.get, self.key)
-        elif self.path is not None and self.path.exists():
+        elif saved is not None and warp_calls.restore(saved["warp"], lambda: _env_step_shapes(trainer, state)):
+            if saved["warp"]:
+                # as the chunk's own trace started in the process that compiled it: the first state, traced next,
+                # then lowers to the program that process compiled (its Warp call ids included), which JAX's
+                # persistent cache holds
+                fresh_trace()
             self.how = "loaded"
-            self._future = _submit(self._pool, self._load)
+            self._future = _submit(self._pool, self._load, saved["executable"])
         else:
+            if saved is not None:
+                self.log(f"{self.path} calls Warp's targets otherwise than this process registered them; compiling "
+                         "the chunk")
             self.how = "compiled"
-            self._future = _submit(self._pool, self._compile, self._lower())
+            self._future = _submit(self._pool, self._compile, self._trace())
 
-    def _load(self):
+    def _trace(self):
+        """The chunk lowered here, noting the Warp calls its trace adds."""
+        before = warp_calls.counts()
+        lowered = self._lower()
+        self._warp = warp_calls.taken(before)
+        return lowered
+
+    def _read(self) -> dict | None:
+        try:
+            with open(self.path, "rb") as f:
+                saved = pickle.load(f)
+            if not isinstance(saved, dict) or set(saved) != {"executable", "warp"}:
+                raise ValueError("not a chunk file")
+            return saved
+        except Exception as err:        # noqa: BLE001 - a stale or broken file: compile instead
+            self.log(f"could not load {self.path} ({type(err).__name__}: {err}); compiling the chunk")
+            return None
+
+    def _load(self, executable):
         try:
             t = time.perf_counter()
-            with open(self.path, "rb") as f:
-                # onto the run's devices: by default JAX loads onto all of them, and XLA aborts the process where the
-                # program was compiled for fewer (a 2-GPU run on a 4-GPU machine)
-                compiled = serialize_executable.deserialize_and_load(*pickle.load(f), execution_devices=self._devices)
+            # onto the run's devices: by default JAX loads onto all of them, and XLA aborts the process where the
+            # program was compiled for fewer (a 2-GPU run on a 4-GPU machine)
+            compiled = serialize_executable.deserialize_and_load(*executable, execution_devices=self._devices)
             os.utime(self.path)                     # recently used: kept by `_prune`
             jax.monitoring.record_event_duration_secs(LOAD_EVENT, time.perf_counter() - t)
             return compiled
@@ -170,7 +197,7 @@ class ChunkBuild:
                 self.path.parent.mkdir(parents=True, exist_ok=True)
                 tmp = self.path.with_suffix(f".{os.getpid()}.tmp")
                 with open(tmp, "wb") as f:
-                    pickle.dump(serialize_executable.serialize(compiled), f)
+                    pickle.dump({"executable": serialize_executable.serialize(compiled), "warp": self._warp}, f)
                 os.replace(tmp, self.path)
                 _prune(self.path.parent)
             except Exception as err:    # noqa: BLE001 - a cache that cannot be written only costs the next run time
@@ -183,9 +210,16 @@ class ChunkBuild:
         compiled = self._future.result()
         self._pool.shutdown()
         if compiled is None:                        # the file did not load
-            compiled, self.how = self._compile(self._lower()), "compiled"
+            compiled, self.how = self._compile(self._trace()), "compiled"
         _LIVE[self.key] = compiled
         return compiled, time.perf_counter() - self.start, self.how
+
+
+def _env_step_shapes(trainer, state):
+    """One batched env step traced (shapes only): it registers the Warp targets the chunk's rollout calls, in the
+    order the chunk's trace first meets them."""
+    action = jax.ShapeDtypeStruct((state.env.obs.shape[0], trainer.env.action_size), "float32")
+    return jax.eval_shape(jax.vmap(trainer.env.step), state.env, action)
 
 
 def _prune(folder: Path) -> None:
