@@ -75,6 +75,7 @@ class StubTrainer:
 
 class StubEnv:
     config = StubConfig(0.0)
+    physics = "jax"
 
 
 STUB_RUN = """

@@ -134,7 +134,9 @@ class ChunkBuild:
         self._devices = list(where.mesh.devices.flat)
         self._warp = {}                             # the Warp calls of the traced program (`warp_calls.taken`)
         self.key = key(trainer, where, n, (state, data))
-        folder = directory() if jax.process_count() == 1 else None
+        # a program that calls Warp is kept only where its Warp calls can be described again (`warp_calls`)
+        keep = jax.process_count() == 1 and (trainer.env.physics != "warp" or warp_calls.AVAILABLE)
+        folder = directory() if keep else None
         self.path = folder / f"chunk-{self.key}.exe" if folder else None
         self._pool = concurrent.futures.ThreadPoolExecutor(1)
         saved = self._read() if self.key not in _LIVE and self.path is not None and self.path.exists() else None

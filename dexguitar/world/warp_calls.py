@@ -14,8 +14,11 @@ from typing import Callable
 try:
     from mujoco.mjx.warp import ffi as _ffi
     from warp._src.jax.ffi import FfiCallDesc
-except ImportError:         # no warp-lang: no Warp targets
+except ImportError:         # no warp-lang (or another layout of it): no Warp targets
     _ffi = FfiCallDesc = None
+# Can this process record and restore Warp calls? Where not, a program that calls Warp is not kept in a file.
+AVAILABLE = hasattr(_ffi, "_JAX_CALLABLE_VARIADIC_TUPLE_REGISTRY") and hasattr(
+    _ffi, "_JAX_CALLABLE_VARIADIC_TUPLE_REGISTRY_LOCK")
 
 
 def _what(key) -> str:
@@ -26,7 +29,7 @@ def _what(key) -> str:
 
 def _targets() -> dict:
     """{FFI target name: (what it wraps, Warp's callable)} of every MJX Warp target registered in this process."""
-    if _ffi is None:
+    if not AVAILABLE:
         return {}
     with _ffi._JAX_CALLABLE_VARIADIC_TUPLE_REGISTRY_LOCK:
         items = list(_ffi._JAX_CALLABLE_VARIADIC_TUPLE_REGISTRY.items())
