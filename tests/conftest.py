@@ -73,11 +73,8 @@ def compiles():
 @pytest.fixture
 def export_compiles(compiles, monkeypatch):
     """A list that gets the compile count (`compiles`) at each export of a run, the last thing a host call of `train`
-    does: the difference of two entries is what the later host call compiled. Also empties this process's chunks
-    (`learn.executable._LIVE`), so that a run compiles or loads its chunk rather than take an earlier test's."""
+    does: the difference of two entries is what the later host call compiled."""
     from dexguitar.learn import checkpoint as C
-    from dexguitar.learn import executable as X
-    monkeypatch.setattr(X, "_LIVE", {})
     counts, save = [], C.Saver.save
 
     def counting_save(saver, *args, **kwargs):
@@ -130,8 +127,8 @@ def offscreen_gl() -> str:
 # ------------------------------------------------------------------------------------------- scheduling (xdist)
 # A file's tests run in one process, in order. The training chunks they share are compiled once, by the first file of
 # this order that needs one (the left hand's by test_faults.py, the synchronizer's by test_sync.py), and kept in a file
-# beside the compilation cache that a later process loads in seconds (`compiled_chunk`, `learn.executable`), so the
-# files that need them start after those two. Longest first otherwise; measured with an empty cache, 2 processes.
+# beside the compilation cache that a later process loads (`compiled_chunk`, `learn.executable`), so the files that
+# need them start after those two. Longest first otherwise; measured with an empty cache, 2 processes.
 FIRST = ("tests/test_faults.py", "tests/test_sync.py", "tests/test_scripted.py", "tests/test_feedforward.py",
          "tests/test_envs.py", "tests/test_devices.py", "tests/test_compile_once.py", "tests/test_notebooks.py",
          "tests/test_learn.py", "tests/test_world.py", "tests/test_install.py", "tests/test_plan_robustness.py",

@@ -23,8 +23,10 @@ def test_a_second_call_compiles_nothing_and_a_later_run_in_the_process_reuses_it
     """Within a run, the second host call of `train` compiles nothing. A second run of the same code, config and
     shapes in one process (`dexguitar songs`: the next song of a capacity) takes the chunk the first one compiled
     or loaded from its file (`learn.executable`): nothing traced, lowered, compiled or loaded, and the same numbers."""
+    from dexguitar.learn import executable as X
     from dexguitar.learn import run as RUN
     from dexguitar.learn.trainer import Trainer
+    monkeypatch.setattr(X, "_LIVE", {})         # the first run compiles or loads its chunk, not take an earlier test's
 
     def train(out, iterations):
         logs = []

@@ -35,8 +35,8 @@ def test_four_devices_match_one_and_a_four_device_run_resumes_on_one(left_traine
         x = np.tanh(x * 2.0 + data)
     np.testing.assert_allclose(out["stub_out"], x, rtol=1e-5)
 
-    messages = []
-    monkeypatch.setattr(X, "_LIVE", {})         # so that the one chunk in it is this run's
+    messages, built, result = [], [], X.ChunkBuild.result
+    monkeypatch.setattr(X.ChunkBuild, "result", lambda build: built.append(result(build)) or built[-1])
     RUN.train(left_trainer, tmp_path / "on1", iterations=1, devices=1, progress=False, log=messages.append)
     start = left_trainer.init()
     params = {n: jax.device_get(C.restore(tmp_path / f"on{n}" / "ckpt", start)[0].params) for n in (1, 4)}
@@ -47,7 +47,7 @@ def test_four_devices_match_one_and_a_four_device_run_resumes_on_one(left_traine
     assert diff < 1e-5                           # ... and identically on 1 and 4 devices (atol 1e-5)
     # PPO's minibatch of 8 samples and the discriminator's batch of 16: one device multiplies all their rows through
     # the networks, each of 4 devices a quarter of them (2 and 4)
-    (chunk,) = X._LIVE.values()
+    ((chunk, _, _),) = built                     # this run's program
     rows = sorted({int(r) for r in re.findall(r"= f32\[(\d+),256\]\S* dot\(", chunk.as_text())})
     assert {8, 16} <= set(rows) and 2 not in rows
     assert {2, 4} <= set(out["dot_rows"]) and 16 not in out["dot_rows"]

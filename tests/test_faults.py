@@ -52,6 +52,7 @@ def test_an_env_with_nan_physics_is_reset_and_learning_stays_finite(trainer, com
 def test_nonfinite_parameters_roll_back_and_are_never_saved(trainer, tmp_path, monkeypatch):
     fresh = trainer.init
     calls = []
+    trainer.state_shapes        # the chunk's shapes (`jax.eval_shape` of `init`) taken now: the first real call poisons
 
     def init_poisoned_once(key=None):
         calls.append(1)
