@@ -128,9 +128,12 @@ def offscreen_gl() -> str:
 # A file's tests run in one process, in order. The training chunks they share are compiled once, by the first file of
 # this order that needs one (the left hand's by test_faults.py, the synchronizer's by test_sync.py), and kept in a file
 # beside the compilation cache that a later process loads (`compiled_chunk`, `learn.executable`), so the files that
-# need them start after those two. Longest first otherwise; measured with an empty cache, 2 processes.
-FIRST = ("tests/test_faults.py", "tests/test_sync.py", "tests/test_scripted.py", "tests/test_feedforward.py",
-         "tests/test_envs.py", "tests/test_devices.py", "tests/test_compile_once.py", "tests/test_notebooks.py",
+# need them start after those two. xdist gives a process its next file when it has at most 2 tests left: the process
+# of test_faults.py, whose tests end before test_sync.py's, usually takes test_devices.py next, which then takes the
+# left hand's chunk from memory instead of loading its file (8-13 s). Longest first otherwise; measured with an empty
+# cache, 2 processes.
+FIRST = ("tests/test_faults.py", "tests/test_sync.py", "tests/test_devices.py", "tests/test_notebooks.py",
+         "tests/test_scripted.py", "tests/test_feedforward.py", "tests/test_envs.py", "tests/test_compile_once.py",
          "tests/test_learn.py", "tests/test_world.py", "tests/test_install.py", "tests/test_plan_robustness.py",
          "tests/test_cursor.py", "tests/test_retarget.py", "tests/test_rewards_metrics.py", "tests/test_perform.py",
          "tests/test_detect.py")
