@@ -132,7 +132,6 @@ class ChunkBuild:
         self.log = log
         self._lower = lambda: trainer.make_train_chunk(n, where).lower(state, data)
         self._devices = list(where.mesh.devices.flat)
-        self._warp = {}                             # the Warp calls of the traced program (`warp_calls.taken`)
         self.key = key(trainer, where, n, (state, data))
         # a program that calls Warp is kept only where its Warp calls can be described again (`warp_calls`)
         keep = jax.process_count() == 1 and (trainer.env.physics != "warp" or warp_calls.AVAILABLE)
@@ -156,14 +155,13 @@ class ChunkBuild:
                 self.log(f"{self.path} calls Warp's targets otherwise than this process registered them; compiling "
                          "the chunk")
             self.how = "compiled"
-            self._future = _submit(self._pool, self._compile, self._trace())
+            self._future = _submit(self._pool, self._compile, *self._trace())
 
     def _trace(self):
-        """The chunk lowered here, noting the Warp calls its trace adds."""
+        """(the chunk lowered here, the Warp calls its trace added: `warp_calls.taken`)."""
         before = warp_calls.counts()
         lowered = self._lower()
-        self._warp = warp_calls.taken(before)
-        return lowered
+        return lowered, warp_calls.taken(before)
 
     def _read(self) -> dict | None:
         try:
@@ -189,7 +187,7 @@ class ChunkBuild:
             self.log(f"could not load {self.path} ({type(err).__name__}: {err}); compiling the chunk")
             return None
 
-    def _compile(self, lowered):
+    def _compile(self, lowered, warp: dict):
         hits = _HITS[threading.get_ident()]
         compiled = lowered.compile()
         if _HITS[threading.get_ident()] > hits and jax.default_backend() in NO_RESAVE:
@@ -199,7 +197,7 @@ class ChunkBuild:
                 self.path.parent.mkdir(parents=True, exist_ok=True)
                 tmp = self.path.with_suffix(f".{os.getpid()}.tmp")
                 with open(tmp, "wb") as f:
-                    pickle.dump({"executable": serialize_executable.serialize(compiled), "warp": self._warp}, f)
+                    pickle.dump({"executable": serialize_executable.serialize(compiled), "warp": warp}, f)
                 os.replace(tmp, self.path)
                 _prune(self.path.parent)
             except Exception as err:    # noqa: BLE001 - a cache that cannot be written only costs the next run time
@@ -212,7 +210,7 @@ class ChunkBuild:
         compiled = self._future.result()
         self._pool.shutdown()
         if compiled is None:                        # the file did not load
-            compiled, self.how = self._compile(self._trace()), "compiled"
+            compiled, self.how = self._compile(*self._trace()), "compiled"
         _LIVE[self.key] = compiled
         return compiled, time.perf_counter() - self.start, self.how
 
