@@ -222,8 +222,11 @@ def test_two_songs_of_a_capacity_share_one_program_whatever_was_traced_between(t
     assert lowered(other) == first
     # the state's first value has one program too: the songs are its arguments, not constants
     key = jax.random.PRNGKey(0)
-    assert (trainer._init_program.lower(key, trainer.init_inputs()).as_text()
-            == other._init_program.lower(key, other.init_inputs()).as_text())
+    nets = jax.eval_shape(trainer.initial_params, key, trainer.init_inputs())
+    assert (trainer._params_program.lower(key, trainer.init_inputs()).as_text()
+            == other._params_program.lower(key, other.init_inputs()).as_text())
+    assert (trainer._init_program.lower(key, trainer.init_inputs(), nets).as_text()
+            == other._init_program.lower(key, other.init_inputs(), nets).as_text())
 
 
 @pytest.mark.parametrize("user, expected", [

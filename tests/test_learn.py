@@ -100,6 +100,60 @@ def test_normalizer_merges_batches_exactly():
     assert np.all(np.abs(np.asarray(stats["var"]) - 4.0) < 0.5) and all_.shape == (1001, 4)
 
 
+def test_gru_is_flax_gru_cell_over_the_frames():
+    """networks.GRU joins the cell's six gate kernels into two products: the same parameters (names, shapes and initial
+    values) as `nn.GRUCell` and the same output as the cell stepped over the frames from a zero state."""
+    import flax.linen as nn
+
+    class Cell(nn.Module):
+        @nn.compact
+        def __call__(self, frames):
+            cell = nn.GRUCell(N.LATENT, name="gru")
+            h = jnp.zeros(frames.shape[:-2] + (N.LATENT,))
+            for t in range(frames.shape[-2]):
+                h, _ = cell(h, frames[..., t, :])
+            return h
+
+    class Joined(nn.Module):
+        @nn.compact
+        def __call__(self, frames):
+            return N.GRU(name="gru")(frames)
+
+    x = jax.random.normal(jax.random.PRNGKey(1), (6, IM.FRAMES, 28))
+    p_cell, p_joined = Cell().init(jax.random.PRNGKey(0), x), Joined().init(jax.random.PRNGKey(0), x)
+    assert jax.tree.structure(p_cell) == jax.tree.structure(p_joined)
+    jax.tree.map(np.testing.assert_array_equal, p_cell, p_joined)
+    leaves, tree = jax.tree.flatten(p_cell)      # biases are zero at init: perturb every leaf to check them too
+    keys = jax.random.split(jax.random.PRNGKey(2), len(leaves))
+    params = jax.tree.unflatten(tree, [w + 0.3 * jax.random.normal(k, w.shape) for w, k in zip(leaves, keys)])
+    np.testing.assert_allclose(Joined().apply(params, x), Cell().apply(params, x), rtol=1e-5, atol=1e-6)
+
+
+def test_hinge_loss_and_its_gradient_by_separate_passes():
+    """The loss as its formula reads, with the penalty's gradient taken on the mixtures alone, against hinge_loss's one
+    batch of real, fake and mixed samples: the same value and the same parameter gradient."""
+    disc = N.Discriminator()
+    real = jax.random.normal(jax.random.PRNGKey(3), (16, IM.FRAMES, 5))
+    fake = 2.0 * jax.random.normal(jax.random.PRNGKey(4), (16, IM.FRAMES, 5))
+    params = disc.init(jax.random.PRNGKey(0), real)
+    key = jax.random.PRNGKey(5)
+
+    def by_formula(p):
+        alpha = jax.random.uniform(key, (16, 1, 1))
+        mixed = alpha * real + (1 - alpha) * fake
+        grad = jax.grad(lambda x: jnp.sum(disc.apply(p, x)))(mixed)
+        norm = jnp.sqrt(jnp.sum(grad.reshape(16, -1) ** 2, -1) + 1e-12)
+        return (jnp.mean(jax.nn.relu(1 - disc.apply(p, real))) + jnp.mean(jax.nn.relu(1 + disc.apply(p, fake)))
+                + 10.0 * jnp.mean((norm - 1) ** 2))
+
+    want, g_want = jax.value_and_grad(by_formula)(params)
+    (got, log), g_got = jax.value_and_grad(IM.hinge_loss, argnums=1, has_aux=True)(disc.apply, params, real, fake,
+                                                                                    key, 10.0)
+    np.testing.assert_allclose(got, want, rtol=1e-5)
+    assert float(log["grad_penalty"]) > 0.01            # the penalty is part of what is compared
+    jax.tree.map(lambda a, b: np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-6), g_got, g_want)
+
+
 def test_discriminator_separates_reference_from_random_motion():
     rng = np.random.default_rng(0)
     t = np.linspace(0, 1, IM.FRAMES)
@@ -127,6 +181,26 @@ def test_discriminator_separates_reference_from_random_motion():
     assert float(jnp.mean(r_real[:, None] > r_fake[None, :])) > 0.85      # ranks reference above random
 
 
+def test_reference_features_are_computed_per_frame():
+    """The training data hold each discriminator's features of every reference frame; a window of them is the
+    features of the window of link poses, for the guitar-relative and the wrist-relative discriminator."""
+    from dexguitar.learn.trainer import reference_data
+    rng = np.random.default_rng(2)
+    frames = np.zeros((20, 16, 7), np.float32)
+    frames[..., :3] = rng.normal(0, 0.05, (20, 16, 3))
+    q = rng.normal(size=(20, 16, 4))
+    frames[..., 3:] = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    feats, n = reference_data(frames, IM.DISCRIMINATORS["left"])
+    assert int(n) == 20 and set(feats) == {"wrist", "fingers"}
+    key = jax.random.PRNGKey(7)
+    windows = IM.sample_reference(key, jnp.asarray(frames), 20, 8)              # (8, 3, 16, 7)
+    for name, d in IM.DISCRIMINATORS["left"].items():
+        assert feats[name].shape == (1024, d.features)                          # padded to the capacity
+        assert not np.any(np.asarray(feats[name][20:]))
+        np.testing.assert_allclose(IM.sample_reference(key, feats[name], n, 8), IM.features(windows, d.links, d.parent),
+                                   atol=1e-6)
+
+
 def test_wrist_relative_features_ignore_the_wrist_pose():
     """The left fingers' discriminator sees the fingers relative to the wrist: moving and turning the whole hand
     leaves its input unchanged."""
@@ -149,6 +223,18 @@ def test_wrist_relative_features_ignore_the_wrist_pose():
 @pytest.fixture
 def trainer(left_trainer):
     return left_trainer
+
+
+def test_first_state_is_one_program_s_wherever_the_networks_are_drawn(trainer):
+    """`init` draws the networks in a program of their own on the CPU and the rest of the first state on the
+    default device; from one key that is the state `initial_state` makes in one program, leaf for leaf."""
+    key = jax.random.PRNGKey(5)
+    split = trainer.init(key)
+    whole = jax.jit(trainer.initial_state)(key, trainer.init_inputs())
+    assert jax.tree.structure(split) == jax.tree.structure(whole)
+    jax.tree.map(lambda a, b: np.testing.assert_array_equal(np.asarray(a), np.asarray(b)), split, whole)
+    assert not np.array_equal(split.params["critic"]["params"]["trunk"]["fc1"]["kernel"],
+                              trainer.init(jax.random.PRNGKey(6)).params["critic"]["params"]["trunk"]["fc1"]["kernel"])
 
 
 def test_training_iterations_and_exact_resume(trainer, tmp_path, compiled_chunk):

@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Sequence
 
 import flax.linen as nn
+import jax
 import jax.numpy as jnp
 
 LATENT = 256
@@ -20,15 +21,58 @@ def relu6(x):
     return jnp.clip(x, 0.0, 6.0)
 
 
+class _Weights(nn.Module):
+    """One gate's kernel (and bias) under the name and initializer `nn.GRUCell` gives it, so checkpoints match."""
+
+    features: int
+    kernel_init: nn.initializers.Initializer
+    use_bias: bool = True
+
+    @nn.compact
+    def __call__(self, inputs: int):
+        kernel = self.param("kernel", self.kernel_init, (inputs, self.features))
+        bias = self.param("bias", nn.initializers.zeros, (self.features,)) if self.use_bias else None
+        return kernel, bias
+
+
+class GRU(nn.Module):
+    """`nn.GRUCell` run over the frames from a zero state, with its six gate kernels joined into two matrices: the
+    input's projection of every frame is one product, each later frame adds one product of the state, and the first
+    frame none (its state is zero). The same function and parameters as the cell, with a sixth of its products, so
+    the training program (the actor's, the critic's and the discriminators' GRUs, the last differentiated twice for
+    the gradient penalty) compiles in fewer instructions (docs/benchmarks.md, "The training program's size")."""
+
+    features: int = LATENT
+
+    @nn.compact
+    def __call__(self, frames):
+        w = lambda name, init, bias=True: _Weights(self.features, init, bias, name=name)  # noqa: E731
+        lecun, orth = nn.initializers.lecun_normal(), nn.initializers.orthogonal()
+        gates_in = [w(n, lecun)(frames.shape[-1]) for n in ("ir", "iz", "in")]
+        gates_h = [w(n, orth, n == "hn")(self.features) for n in ("hr", "hz", "hn")]
+        x = frames @ jnp.concatenate([k for k, _ in gates_in], 1) + jnp.concatenate([b for _, b in gates_in])
+        w_h, b_hn = jnp.concatenate([k for k, _ in gates_h], 1), gates_h[2][1]
+        h = None
+        for t in range(frames.shape[-2]):
+            x_r, x_z, x_n = jnp.split(x[..., t, :], 3, axis=-1)
+            if h is None:
+                h_r = h_z = 0.0
+                h_n = b_hn
+            else:
+                h_r, h_z, h_n = jnp.split(h @ w_h, 3, axis=-1)
+                h_n = h_n + b_hn
+            r, z = jax.nn.sigmoid(x_r + h_r), jax.nn.sigmoid(x_z + h_z)
+            n = jnp.tanh(x_n + r * h_n)
+            h = (1.0 - z) * n if h is None else (1.0 - z) * n + z * h
+        return h
+
+
 class Encoder(nn.Module):
     """(pose history (H, F), goal (G,)) -> latent z (256,): GRU over the frames + goal MLP, added."""
 
     @nn.compact
     def __call__(self, frames, goal):
-        cell = nn.GRUCell(LATENT, name="gru")
-        h = jnp.zeros(frames.shape[:-2] + (LATENT,), frames.dtype)
-        for t in range(frames.shape[-2]):
-            h, _ = cell(h, frames[..., t, :])
+        h = GRU(name="gru")(frames)
         g = nn.Dense(LATENT, name="goal1")(goal)
         g = nn.Dense(LATENT, name="goal2")(relu6(g))
         return h + g
@@ -99,10 +143,7 @@ class Discriminator(nn.Module):
 
     @nn.compact
     def __call__(self, frames):
-        cell = nn.GRUCell(LATENT, name="gru")
-        h = jnp.zeros(frames.shape[:-2] + (LATENT,), frames.dtype)
-        for t in range(frames.shape[-2]):
-            h, _ = cell(h, frames[..., t, :])
+        h = GRU(name="gru")(frames)
         orth = nn.initializers.orthogonal
         x = nn.relu(nn.Dense(256, kernel_init=orth(jnp.sqrt(2.0)), name="fc1")(h))
         x = nn.relu(nn.Dense(128, kernel_init=orth(jnp.sqrt(2.0)), name="fc2")(x))

@@ -98,7 +98,7 @@ class Data:
     """What a training chunk reads besides its state; an argument, so its values are never compiled in."""
 
     songs: TL.Timeline             # a padded batch (`timeline.batch`)
-    reference: jnp.ndarray         # (T, 16, 7) reference link poses at 60 Hz, padded
+    reference: dict                # {discriminator: (T, F) its features of each reference frame at 60 Hz, padded}
     reference_frames: jnp.ndarray  # int32 (): valid frames of `reference`
 
 
@@ -132,19 +132,29 @@ class TrainState:
     iteration: jnp.ndarray
 
 
-def reference_data(reference) -> tuple[jnp.ndarray, jnp.ndarray]:
-    """(padded frames, count): a reference motion padded to a power-of-two length."""
-    reference = jnp.zeros((IM.FRAMES, 16, 7), jnp.float32) if reference is None else jnp.asarray(reference,
-                                                                                               jnp.float32)
-    n = reference.shape[0]
-    padded = jnp.zeros((TL.capacity(n, 1024),) + reference.shape[1:], jnp.float32).at[:n].set(reference)
-    return padded, jnp.int32(n)
+def reference_data(reference, discs: dict) -> tuple[dict, jnp.ndarray]:
+    """({discriminator: padded features}, count): each discriminator's input features of every frame of a reference
+    motion (T, 16, 7), computed once here, so the training program only gathers windows of them; zero-padded to a
+    power-of-two length."""
+    n = IM.FRAMES if reference is None else reference.shape[0]
+    pad = lambda x: jnp.zeros((TL.capacity(n, 1024), x.shape[-1]), jnp.float32).at[:n].set(x)  # noqa: E731
+    return ({name: pad(IM.features(jnp.asarray(reference, jnp.float32), d.links, d.parent))
+             for name, d in discs.items()}, jnp.int32(n))
+
+
+def host_device():
+    """The host's CPU, or the default device where JAX runs without its CPU backend (JAX_PLATFORMS=cuda)."""
+    try:
+        return jax.devices("cpu")[0]
+    except RuntimeError:
+        return jax.devices()[0]
 
 
 def finite(tree) -> jnp.ndarray:
-    """Are all the numbers of a pytree finite?"""
-    leaves = [jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves(tree) if jnp.issubdtype(x.dtype, jnp.inexact)]
-    return jnp.all(jnp.stack(leaves)) if leaves else jnp.bool_(True)
+    """Are all the numbers of a pytree finite? One test of all of them joined: a test per array (hundreds, for
+    parameters and optimizer states) would be as many reductions for XLA to compile."""
+    leaves = [jnp.ravel(x) for x in jax.tree.leaves(tree) if jnp.issubdtype(x.dtype, jnp.inexact)]
+    return jnp.all(jnp.isfinite(jnp.concatenate(leaves))) if leaves else jnp.bool_(True)
 
 
 class Trainer:
@@ -168,7 +178,7 @@ class Trainer:
         self.layout = self.env.layout
         self.spec = self.make_spec()
         self.disc_specs = IM.DISCRIMINATORS[config.hand] if reference is not None else {}
-        self.data = Data(self.env.songs, *reference_data(reference))
+        self.data = Data(self.env.songs, *reference_data(reference, self.disc_specs))
         self.columns = tuple(self.env.reward_columns) + tuple(f"disc_{n}" for n in self.disc_specs)
         goal = config.goal_weight if config.goal_weight >= 0 else None
         disc = config.disc_weight if config.disc_weight >= 0 else None
@@ -201,12 +211,18 @@ class Trainer:
     def init(self, key=None) -> TrainState:
         """The first state of a run. One compiled program per trainer shape: the songs (and a synchronizer's frozen
         policies) are its arguments (`init_inputs`), never constants, so the next song of a capacity loads it from
-        the persistent cache instead of compiling it again."""
+        the persistent cache instead of compiling it again.
+
+        The networks' first parameters are drawn by a program of their own on the host's CPU: on a GPU, XLA took
+        12.1 s to compile it (14,506 instructions, the orthogonal initializers' QR factorizations), beside the
+        training chunk's compile and slowing it (docs/benchmarks.md, "Compilation")."""
         key = jax.random.PRNGKey(self.config.seed) if key is None else key
-        return self._init_program(key, self.init_inputs())
+        inputs, cpu = self.init_inputs(), host_device()
+        nets = self._params_program(jax.device_put(key, cpu), jax.device_put(inputs, cpu))
+        return self._init_program(key, inputs, jax.device_put(nets, jax.devices()[0]))
 
     def init_inputs(self) -> dict:
-        """What `init` reads besides the key: the arguments of its program."""
+        """What `init` reads besides the key: the arguments of its programs."""
         return {"songs": self.env.songs}
 
     @functools.cached_property
@@ -215,12 +231,16 @@ class Trainer:
         return jax.eval_shape(self.init)
 
     @functools.cached_property
+    def _params_program(self):
+        return jax.jit(self.initial_params)
+
+    @functools.cached_property
     def _init_program(self):
         return jax.jit(self.initial_state)
 
-    def initial_state(self, key, inputs: dict) -> TrainState:
-        cfg = self.config
-        k_pol, k_crit, k_disc, k_env, k_age, key = jax.random.split(key, 6)
+    def initial_params(self, key, inputs: dict) -> tuple[dict, dict]:
+        """(parameters {"policy", "critic", "disc"[, "frozen"]}, observation normalizer) of a run's start."""
+        k_pol, k_crit, k_disc = jax.random.split(key, 6)[:3]
         policy, obs_norm, frozen = self.init_policy(k_pol, inputs)
         frames = (self.layout.history, self.layout.frame_size)
         params = {
@@ -232,6 +252,13 @@ class Trainer:
         }
         if frozen is not None:
             params["frozen"] = frozen
+        return params, obs_norm
+
+    def initial_state(self, key, inputs: dict, nets: tuple[dict, dict] | None = None) -> TrainState:
+        """The first state from `key`; `nets`: `initial_params(key, inputs)`, made here if not given."""
+        cfg = self.config
+        params, obs_norm = self.initial_params(key, inputs) if nets is None else nets
+        k_env, k_age, key = jax.random.split(key, 6)[3:]
         opt = {k: self.optimizers[k].init(params[k]) for k in self.optimizers}
         if cfg.kl_target:
             opt["lr"] = jnp.float32(cfg.actor_lr)
@@ -298,22 +325,22 @@ class Trainer:
         k_ins, k_steps, key = jax.random.split(key, 3)
         norms, buffers, rewards = {}, {}, []
 
-        def reference(k, n, d):
-            return IM.features(IM.sample_reference(k, data.reference, data.reference_frames, n), d.links, d.parent)
-        for i, (name, d) in enumerate(self.disc_specs.items()):
+        def reference(k, n, name):
+            return IM.sample_reference(k, data.reference[name], data.reference_frames, n)
+        for i, name in enumerate(self.disc_specs):
             k_ref, k_pick = jax.random.split(jax.random.fold_in(k_ins, i))
             fake = fake_all[name].reshape((-1,) + fake_all[name].shape[-2:])
             norms[name] = N.normalizer_update(N.normalizer_update(ts.disc_norm[name], fake),
-                                              reference(k_ref, fake.shape[0] // 4 + 1, d))
+                                              reference(k_ref, fake.shape[0] // 4 + 1, name))
             pick = jax.random.permutation(k_pick, fake.shape[0])[:cfg.disc_buffer // 4]
             buffers[name] = IM.buffer_add(ts.buffers[name], fake[pick])
 
         def loss_fn(p, k):
             total, log = 0.0, {}
-            for name, d in self.disc_specs.items():
+            for name in self.disc_specs:
                 k1, k2, k3, k = jax.random.split(k, 4)
                 fake = N.normalize(norms[name], IM.buffer_sample(k1, buffers[name], half), clip=1e9)
-                real = N.normalize(norms[name], reference(k2, half, d), clip=1e9)
+                real = N.normalize(norms[name], reference(k2, half, name), clip=1e9)
                 loss, log_n = IM.hinge_loss(lambda pp, x: self.disc.apply(pp, x), p[name], real, fake, k3,
                                             cfg.gp_weight)
                 total = total + loss
