@@ -215,7 +215,7 @@ class Trainer:
 
         The networks' first parameters are drawn by a program of their own on the host's CPU: on a GPU, XLA took
         12.1 s to compile it (14,506 instructions, the orthogonal initializers' QR factorizations), beside the
-        training chunk's compile and slowing it (docs/benchmarks.md, "Compilation")."""
+        training chunk's compile and slowing it (docs/benchmarks.md, "A first and a later run under Warp")."""
         key = jax.random.PRNGKey(self.config.seed) if key is None else key
         inputs, cpu = self.init_inputs(), host_device()
         nets = self._params_program(jax.device_put(key, cpu), jax.device_put(inputs, cpu))
