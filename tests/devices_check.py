@@ -2,7 +2,8 @@
 device count is fixed when JAX starts): one `train` iteration of the shared tiny left-hand trainer (tests/tiny.py) on
 4 devices, saved for the test to compare with its own one-device iteration and to resume on one device. Also a chunk
 kept for one device, loaded from its file in this 4-device process, runs on that one device (by default JAX loads
-an executable onto every device, and XLA aborted a 2-GPU run on a 4-GPU machine). Prints one JSON line."""
+an executable onto every device, and XLA aborted a 2-GPU run on a 4-GPU machine), and what `Placement.each` hands
+each device. Prints one JSON line."""
 import json
 import re
 import sys
@@ -37,7 +38,12 @@ for _ in range(2):
     chunk, _, how = X.ChunkBuild(StubTrainer(), Placement(1), 3, state, data).result()
     hows.append(how)
 x = chunk(jnp.arange(8, dtype=jnp.float32) / 8, data)[0]
-print(json.dumps({"devices": len(jax.devices()), "dot_rows": dot_rows, "stub": hows, "stub_out": x.tolist(),
+
+# each device's part alone: the first row of a part is the device's own
+where = Placement(4)
+each = jax.jit(where.each(lambda a: a - a[:1]))(jax.device_put(jnp.arange(8.0), where.split))
+print(json.dumps({"each": each.tolist(), "each_devices": len(each.devices()),
+                  "shardy": jax.config.jax_use_shardy_partitioner,"devices": len(jax.devices()), "dot_rows": dot_rows, "stub": hows, "stub_out": x.tolist(),
                   "stub_devices": sorted(d.id for d in x.devices()),
                   "split": [m for m in messages if m.startswith("4 devices")],
                   "chunks": [m.split(" the training chunk")[0] for m in messages if "the training chunk" in m]}))

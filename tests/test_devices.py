@@ -1,6 +1,6 @@
-"""Data parallelism (issue #12) on 4 forced CPU devices: one iteration of the shared tiny left-hand trainer on 4
-devices (tests/devices_check.py, in a process of its own) equals the one-device iteration of this process up to the
-order of float sums, and the 4-device run resumes here on one device."""
+"""Data parallelism on 4 forced CPU devices: one iteration of the shared tiny left-hand trainer on 4 devices
+(tests/devices_check.py, in a process of its own), each device stepping its own envs, equals the one-device iteration
+of this process up to the order of float sums, and the 4-device run resumes here on one device."""
 import json
 import os
 import re
@@ -28,6 +28,9 @@ def test_four_devices_match_one_and_a_four_device_run_resumes_on_one(left_traine
     out = json.loads(done.stdout.strip().splitlines()[-1])
     assert out["devices"] == 4 and out["chunks"] in (["compiled"], ["loaded"])     # loaded: a cache of a run before
     assert out["split"] == ["4 devices: 1 envs and minibatches of 2 samples each"]
+    # `Placement.each`: every device computes on its own 2 of 8 rows (a - its first row), and the parts stay put
+    assert out["each"] == [0, 1] * 4 and out["each_devices"] == 4
+    assert out["shardy"] is False                # several devices: XLA's GSPMD partitions (`Placement`)
     # the one-device chunk runs from its file on the first device alone
     assert out["stub"] == ["compiled", "loaded"] and out["stub_devices"] == [0]
     x, data = np.arange(8, dtype=np.float32) / 8, np.linspace(-1, 1, 8, dtype=np.float32)

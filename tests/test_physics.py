@@ -1,5 +1,5 @@
-"""The physics switch (`EnvConfig.physics`, `world.physics.resolve`): Warp only where it can run (one GPU), else JAX
-with one line that says why; Warp's buffers sized from a run's env count (`EnvConfig.sized`); a selection between
+"""The physics switch (`EnvConfig.physics`, `world.physics.resolve`): Warp only where it can run (a GPU), else JAX
+with one line that says why; Warp's buffers sized from a run's envs per device (`EnvConfig.sized`); a selection between
 states (`physics.where`) as `jnp.where` under JAX; stdout kept for a command's own output while the physics prints
 (`physics.stdout_to_stderr`). No MJX compile."""
 import jax.numpy as jnp
@@ -56,29 +56,30 @@ def test_an_env_asked_for_warp_runs_jax_here(capsys):
 
 
 def on_a_gpu_with_warp(monkeypatch):
-    """`physics.resolve` as on one GPU where warp-lang imports."""
+    """`physics.resolve` as on a GPU where warp-lang imports."""
     real = P.resolve
-    monkeypatch.setattr(P, "resolve", lambda physics="auto", devices=1: real(physics, devices=devices,
-                                                                                 installed=True, platform="gpu"))
+    monkeypatch.setattr(P, "resolve", lambda physics="auto": real(physics, installed=True, platform="gpu"))
 
 
-def test_sized_sets_warp_envs_from_the_env_count_under_warp_alone(monkeypatch, capsys):
+def test_sized_sets_warp_envs_to_the_envs_of_one_device_under_warp_alone(monkeypatch, capsys):
     from dexguitar.envs import EnvConfig
     P.resolve.cache_clear()
     here = EnvConfig()
     assert here.sized(512) is here and EnvConfig(physics="warp").sized(512).physics == "jax"   # this CPU
+    assert "runs as 'jax' here" in capsys.readouterr().err
     on_a_gpu_with_warp(monkeypatch)
     sized = EnvConfig().sized(512)
     assert (sized.physics, sized.warp_envs) == ("warp", 512)
     assert EnvConfig(physics="jax").sized(512) == EnvConfig(physics="jax")
-    assert EnvConfig().sized(512, devices=2) == EnvConfig(physics="jax")         # several devices: JAX, quietly
-    capsys.readouterr()
-    assert EnvConfig(physics="warp").sized(512, devices=4).physics == "jax"
-    assert "not split over 4 devices" in capsys.readouterr().err
+    assert EnvConfig().sized(512, devices=2) == EnvConfig(physics="warp", warp_envs=256)   # each device's own
+    assert EnvConfig(physics="warp").sized(512, devices=4) == EnvConfig(physics="warp", warp_envs=128)
+    assert capsys.readouterr().err == ""
 
 
-@pytest.mark.parametrize("devices, physics, warp_envs", [(1, "warp", 64), (2, "jax", 4096)])
-def test_a_trainer_sizes_warp_for_its_num_envs(devices, physics, warp_envs, monkeypatch):
+@pytest.mark.parametrize("devices, warp_envs", [(1, 64), (2, 32), (4, 16)])
+def test_a_trainer_sizes_warp_for_the_envs_of_one_device(devices, warp_envs, monkeypatch):
+    import types
+
     from dexguitar.learn import trainer as T
     from dexguitar.music import library
     from dexguitar.music import timeline as TL
@@ -90,11 +91,12 @@ def test_a_trainer_sizes_warp_for_its_num_envs(devices, physics, warp_envs, monk
         raise Made(config)
     on_a_gpu_with_warp(monkeypatch)
     monkeypatch.setattr(T.E, "make", make)
+    monkeypatch.setattr(T, "Placement", lambda n: types.SimpleNamespace(n=n))     # as on `devices` GPUs
     with pytest.raises(Made) as made:
         T.Trainer(T.TrainConfig(num_envs=64, minibatch=64), [TL.from_song(library.load("ode_to_joy"))], None,
                   devices=devices)
     config = made.value.args[0]
-    assert (config.physics, config.warp_envs, config.episode_frames) == (physics, warp_envs, 600)
+    assert (config.physics, config.warp_envs, config.episode_frames) == ("warp", warp_envs, 600)
 
 
 def test_stdout_to_stderr_keeps_stdout_for_the_document(capfd):
@@ -129,8 +131,8 @@ def test_eval_json_stays_one_document_whatever_the_play_prints(monkeypatch, capf
     assert "solver iterations limit reached" in err and "initialized" in err
 
 
-def test_the_env_states_scalars_are_not_split_over_devices():
-    # Warp's Data holds its buffers' sizes as scalars beside the env batch: a split of them would not compile
+def test_the_env_states_are_split_over_devices_and_the_rest_is_whole():
+    # Warp's buffers outside the env batch are split too: each device holds its own (`Trainer.reset_envs`)
     import jax
     from flax import struct
     from dexguitar.learn.devices import Placement
@@ -140,8 +142,8 @@ def test_the_env_states_scalars_are_not_split_over_devices():
         env: dict
         params: jax.Array
     where = Placement(1)
-    got = where.shardings(State(env={"qpos": jnp.zeros((4, 3)), "naconmax": jnp.int32(136)}, params=jnp.zeros(2)))
-    assert got.env["qpos"] == where.split and got.env["naconmax"] == where.whole and got.params == where.whole
+    got = where.shardings(State(env={"qpos": jnp.zeros((4, 3)), "nacon": jnp.zeros(1, jnp.int32)}, params=jnp.zeros(2)))
+    assert got.env["qpos"] == where.split and got.env["nacon"] == where.split and got.params == where.whole
 
 
 def test_a_run_made_before_the_physics_fields_resumes_under_jax_alone(tmp_path):

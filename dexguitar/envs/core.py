@@ -100,13 +100,14 @@ class EnvConfig:
 
     def sized(self, envs: int, devices: int = 1) -> "EnvConfig":
         """This config for `envs` envs stepped at once over `devices` devices (a training run's `num_envs`, an
-        evaluation's batch of songs): under Warp, `warp_envs` set to `envs` and `physics` to "warp"; where Warp
-        cannot run (`world.physics.resolve`, several devices included), `physics` "jax"; else this config itself,
-        unchanged, so a JAX run's config (and its compiled programs' keys) is the same whether it was sized or not."""
-        physics = P.resolve(self.physics, devices=devices)
+        evaluation's batch of songs): under Warp, `physics` "warp" and `warp_envs` the envs of one device, which
+        steps them with buffers of its own (`Placement.each`); where Warp cannot run (`world.physics.resolve`),
+        `physics` "jax"; else this config itself, unchanged, so a JAX run's config (and its compiled programs' keys)
+        is the same whether it was sized or not."""
+        physics = P.resolve(self.physics)
         if physics == "warp":
-            return dataclasses.replace(self, physics="warp", warp_envs=int(envs))
-        if self.physics == "warp" or P.resolve(self.physics) == "warp":     # asked for, or one device would run it
+            return dataclasses.replace(self, physics="warp", warp_envs=int(envs) // max(int(devices), 1))
+        if self.physics == "warp":
             return dataclasses.replace(self, physics="jax")
         return self
 

@@ -21,13 +21,28 @@ class Placement:
         if self.n > len(found):
             raise UserError(f"--devices {self.n}: there are {len(found)} {found[0].platform} device(s)")
         self.mesh = Mesh(np.array(found[:self.n]), ("envs",))
+        if self.n > 1:
+            # XLA's GSPMD partitions the programs, not Shardy (JAX's default): with the envs stepped per device
+            # (`each`) inside the training chunk, XLA's GPU compile of the chunk crashed with a segmentation fault
+            # under Shardy on 2 H200s (JAX 0.11.2, either physics) and compiled under GSPMD
+            # (docs/benchmarks.md, "Several GPUs")
+            jax.config.update("jax_use_shardy_partitioner", False)
         self.main = jax.process_index() == 0          # only the first process writes files
 
     def shardings(self, state):
-        """The sharding of every leaf of a `TrainState`. The env states' scalars are whole: MJX's Warp Data holds
-        sizes outside the env batch (its contact buffer's, `world.physics.shared`), and Warp runs on one device."""
-        return jax.tree.map(lambda _: self.whole, state).replace(
-            env=jax.tree.map(lambda x: self.split if len(x.shape) else self.whole, state.env))
+        """The sharding of every leaf of a `TrainState`: the env states split along their first axis (the envs; for
+        MJX's Warp buffers outside the env batch, `world.physics.shared`, the devices: each device's own buffers,
+        joined, as `Trainer.reset_envs` makes them), everything else whole."""
+        return jax.tree.map(lambda _: self.whole, state).replace(env=jax.tree.map(lambda _: self.split, state.env))
+
+    def each(self, fn):
+        """`fn`, a function of env-split pytrees, run by every device on its own part (`shard_map`): MJX's Warp
+        steps a device's envs with that device's buffers (a custom call that XLA cannot split would gather all the
+        envs onto every device). One device: `fn` itself."""
+        if self.n == 1:
+            return fn
+        return jax.shard_map(fn, mesh=self.mesh, in_specs=PartitionSpec("envs"), out_specs=PartitionSpec("envs"),
+                             check_vma=False)
 
     def placed_shapes(self, shapes):
         """A `TrainState`'s shapes (`jax.eval_shape`) with this placement's shardings: what a program is lowered

@@ -142,7 +142,8 @@ class ChunkBuild:
         if self.key in _LIVE:
             self.how = "reused"
             self._future = _submit(self._pool, _LIVE.get, self.key)
-        elif saved is not None and warp_calls.restore(saved["warp"], lambda: _env_step_shapes(trainer, state)):
+        elif saved is not None and warp_calls.restore(saved["warp"],
+                                                      lambda: _env_step_shapes(trainer, where, state)):
             if saved["warp"]:
                 # as the chunk's own trace started in the process that compiled it: the first state, traced next,
                 # then lowers to the program that process compiled (its Warp call ids included), which JAX's
@@ -215,11 +216,11 @@ class ChunkBuild:
         return compiled, time.perf_counter() - self.start, self.how
 
 
-def _env_step_shapes(trainer, state):
-    """One batched env step traced (shapes only): it registers the Warp targets the chunk's rollout calls, in the
-    order the chunk's trace first meets them."""
+def _env_step_shapes(trainer, where, state):
+    """One batched env step traced (shapes only), as the chunk's rollout makes it (each device its own envs): it
+    registers the Warp targets the chunk calls, in the order the chunk's trace first meets them."""
     action = jax.ShapeDtypeStruct((state.env.obs.shape[0], trainer.env.action_size), "float32")
-    return jax.eval_shape(jax.vmap(trainer.env.step), state.env, action)
+    return jax.eval_shape(where.each(jax.vmap(trainer.env.step)), state.env, action)
 
 
 def _prune(folder: Path) -> None:

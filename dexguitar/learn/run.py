@@ -230,12 +230,12 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
     """Run until `iterations` iterations are done (counting those of a resumed run), `max_minutes` have passed, or
     `on_call(iteration)`, called after each host call's export, returns True (the pipeline judges the export there).
     Returns the last summary, with `compile_s` (the first call's compilation) and `calls`. `devices`: how many
-    devices share the envs (default: all)."""
+    devices share the envs (default: the trainer's)."""
     cfg = trainer.config
-    where = Placement(devices)
-    if cfg.num_envs % where.n or cfg.minibatch % where.n:
-        raise UserError(f"{cfg.num_envs} envs and minibatches of {cfg.minibatch} do not split evenly over "
-                        f"{where.n} devices")
+    where = Placement(devices or trainer.devices)
+    if where.n != trainer.devices:     # its envs are reset in groups, one per device, with Warp's buffers sized so
+        raise ValueError(f"a trainer made for {trainer.devices} devices cannot run on {where.n}: give both the "
+                         "same devices")
     log = (log or (lambda msg: print(msg, file=sys.stderr))) if where.main else (lambda msg: None)
     if jax.default_backend() == "cpu" and cfg.num_envs >= CPU_ENVS:
         log(f"warning: {cfg.num_envs} envs on a CPU: XLA:CPU's batched Cholesky factorizations (MJX) can wait on "

@@ -22,6 +22,7 @@ import optax
 from flax import struct
 
 from dexguitar import envs as E
+from dexguitar.errors import UserError
 from dexguitar.learn import imitation as IM
 from dexguitar.learn import networks as N
 from dexguitar.learn import ppo
@@ -174,7 +175,11 @@ class Trainer:
         if config.teacher_weight and not env_config.teacher:
             raise ValueError("TrainConfig.teacher_weight learns from the planner's labels: the env needs "
                              "EnvConfig(teacher=True)")
-        self.env = E.make(config.hand, songs, env_config.sized(config.num_envs, devices or len(jax.devices())))
+        self.devices = Placement(devices).n
+        if config.num_envs % self.devices or config.minibatch % self.devices:
+            raise UserError(f"{config.num_envs} envs and minibatches of {config.minibatch} do not split evenly over "
+                            f"{self.devices} devices")
+        self.env = E.make(config.hand, songs, env_config.sized(config.num_envs, self.devices))
         self.layout = self.env.layout
         self.spec = self.make_spec()
         self.disc_specs = IM.DISCRIMINATORS[config.hand] if reference is not None else {}
@@ -262,7 +267,7 @@ class Trainer:
         opt = {k: self.optimizers[k].init(params[k]) for k in self.optimizers}
         if cfg.kl_target:
             opt["lr"] = jnp.float32(cfg.actor_lr)
-        env_state = jax.vmap(self.env.bind(inputs["songs"]).reset)(jax.random.split(k_env, cfg.num_envs))
+        env_state = self.reset_envs(self.env.bind(inputs["songs"]), jax.random.split(k_env, cfg.num_envs))
         # Envs start at random ages, so their time-outs spread over the episode instead of all of them restarting
         # from the home pose together every `episode_frames` steps.
         env_state = env_state.replace(lifetime=jax.random.randint(k_age, (cfg.num_envs,), 0,
@@ -273,6 +278,13 @@ class Trainer:
             popart=ppo.popart_init(len(self.columns)),
             buffers={n: IM.buffer_init(cfg.disc_buffer, (IM.FRAMES, d.features)) for n, d in self.disc_specs.items()},
             env=env_state, key=key, iteration=jnp.int32(0))
+
+    def reset_envs(self, env, keys):
+        """The envs reset from `keys` in as many groups as the run has devices, joined along their first axis: each
+        group holds the Warp buffers that its device steps it with (`Placement.each`; sized for a group of envs,
+        `EnvConfig.sized`). Under JAX every leaf is per env, and the groups joined are the envs reset at once."""
+        groups = [jax.vmap(env.reset)(k) for k in jnp.split(keys, self.devices)]
+        return groups[0] if len(groups) == 1 else jax.tree.map(lambda *x: jnp.concatenate(x), *groups)
 
     # ------------------------------------------------------------------------------------------ pieces
     def init_policy(self, key, inputs: dict | None = None):
@@ -296,13 +308,15 @@ class Trainer:
         frames, goal = self.layout.split(obs)
         return self.critic.apply(params, N.normalize(obs_norm, frames), jnp.concatenate([goal, privileged], -1))
 
-    def rollout(self, env, ts: TrainState, key):
+    def rollout(self, env, ts: TrainState, key, placement: Placement | None = None):
+        """`horizon` steps of every env; over several devices (`placement`), each device steps its own envs."""
         act = act_fn(self.spec, deterministic=False)
         actor = self.actor_params(ts.params, ts.obs_norm)
+        step = (placement or Placement(1)).each(jax.vmap(env.step))
 
         def one(env_state, k):
             action, logp, _ = act(actor, env_state.obs, k)
-            nxt = jax.vmap(env.step)(env_state, action)
+            nxt = step(env_state, action)
             out = dict(obs=env_state.obs, privileged=env_state.privileged, action=action, logp=logp,
                        reward=nxt.reward, done=nxt.done, terminated=nxt.terminated,
                        link_hist=nxt.body.link_hist, note_end=nxt.info["note_end"], nonfinite=nxt.info["nonfinite"],
@@ -430,11 +444,14 @@ class Trainer:
         return params, opt, dict(jax.tree.map(jnp.mean, log), **{"nonfinite/ppo_updates": skipped})
 
     # ------------------------------------------------------------------------------------------ iteration
-    def iteration(self, ts: TrainState, data: Data, split=None):
+    def iteration(self, ts: TrainState, data: Data, placement: Placement | None = None):
+        """One iteration; over the devices of `placement` (default: one), which step their own envs and split each
+        PPO minibatch."""
         cfg = self.config
         env = self.env.bind(data.songs)
+        split = placement.split if placement is not None and placement.n > 1 else None
         k_roll, k_disc, k_ppo, key = jax.random.split(ts.key, 4)
-        env_state, traj = self.rollout(env, ts, k_roll)
+        env_state, traj = self.rollout(env, ts, k_roll, placement)
 
         disc_params, disc_opt, disc_norm, buffers, disc_log, disc_rewards = self.update_discriminators(
             ts, traj, data, k_disc)
@@ -496,10 +513,9 @@ class Trainer:
         program is the same for every song of a capacity, whatever the process traced before."""
         placement = placement or Placement()
         state = placement.shardings(self.state_shapes)
-        split = placement.split if placement.n > 1 else None
 
         def chunk(ts, data):
-            ts, metrics = jax.lax.scan(lambda s, _: self.iteration(s, data, split), ts, None, length=n)
+            ts, metrics = jax.lax.scan(lambda s, _: self.iteration(s, data, placement), ts, None, length=n)
             return ts, jax.tree.map(lambda x: jnp.sum(x) if x.ndim else x, metrics)
         return FreshJit(jax.jit(chunk, donate_argnums=0, in_shardings=(state, placement.replicated(self.data)),
                                 out_shardings=(state, placement.whole)))

@@ -60,14 +60,11 @@ def warp_installed() -> bool:
 
 
 @functools.cache
-def resolve(physics: str = "auto", *, devices: int = 1, installed: bool | None = None,
-            platform: str | None = None) -> str:
-    """"jax" or "warp": the implementation `physics` ("auto", "jax" or "warp") runs on here, for envs spread over
-    `devices` devices. "auto" is Warp where `warp` imports, JAX's default backend is a GPU and the envs are on one
-    device, else JAX; "warp" where it cannot run is JAX, with one line on stderr saying why. Warp keeps one contact
-    buffer for all the envs of a program (`shared`), which a split of the envs over devices would cut apart.
-    `installed` and `platform` (JAX's default backend) stand in for this machine's. Cached: the line is printed once
-    per process."""
+def resolve(physics: str = "auto", *, installed: bool | None = None, platform: str | None = None) -> str:
+    """"jax" or "warp": the implementation `physics` ("auto", "jax" or "warp") runs on here. "auto" is Warp where
+    `warp` imports and JAX's default backend is a GPU, else JAX; "warp" where it cannot run is JAX, with one line on
+    stderr saying why. `installed` and `platform` (JAX's default backend) stand in for this machine's. Cached: the
+    line is printed once per process."""
     if physics not in PHYSICS:
         raise ValueError(f"physics {physics!r}: expected one of {', '.join(PHYSICS)}")
     if physics == "jax":
@@ -75,9 +72,7 @@ def resolve(physics: str = "auto", *, devices: int = 1, installed: bool | None =
     installed = warp_installed() if installed is None else installed
     platform = jax.default_backend() if platform is None else platform
     why = ("warp-lang is not installed (pip install 'dexguitar[warp]')" if not installed else
-           f"no GPU (JAX runs on {platform})" if platform != "gpu" else
-           f"Warp's shared contact buffer is not split over {devices} devices (--devices 1 runs Warp)"
-           if devices > 1 else None)
+           f"no GPU (JAX runs on {platform})" if platform != "gpu" else None)
     if why is None:
         return "warp"
     if physics == "warp":
