@@ -32,7 +32,7 @@ from dexguitar.learn.executable import in_flight
 from dexguitar.learn.memory import check_envs, env_bytes, training_bytes
 from dexguitar.learn import policy as PO
 from dexguitar.configs import load_config, recorded_config
-from dexguitar.learn.run import check_init, check_out, compilation_cache, train, xla_flags
+from dexguitar.learn.run import SAVE_EVERY_S, check_init, check_out, compilation_cache, train, xla_flags
 from dexguitar.learn.sync import SyncTrainer
 from dexguitar.learn.trainer import Trainer
 from dexguitar.motion import load_motion
@@ -62,6 +62,13 @@ def positive_float(text: str) -> float:
     value = float(text)
     if not value > 0:
         raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    return value
+
+
+def seconds(text: str) -> float:
+    value = float(text)
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"must be 0 or more, got {text}")
     return value
 
 
@@ -207,7 +214,7 @@ def _training(args) -> dict:
     return train(trainer, args.out, iterations=cfg.iterations, resume=args.resume,
                  meta={"songs": [s.title for s in songs], "motion": motion.name},
                  stop_after_calls=args.stop_after_calls, max_minutes=args.max_minutes, init_from=args.init_from,
-                 devices=args.devices)
+                 devices=args.devices, save_every=args.save_every)
 
 
 def _song_source(source: str) -> str:
@@ -254,7 +261,8 @@ def _sync(args) -> int:
                         meta={"songs": [s.title for s in songs], "motion": motion.name, "left": str(left),
                               "right": str(right), "song_files": [_song_source(s) for s in song_files],
                               **({"track": track} if track is not None else {})},
-                        stop_after_calls=args.stop_after_calls, max_minutes=args.max_minutes, devices=args.devices)
+                        stop_after_calls=args.stop_after_calls, max_minutes=args.max_minutes, devices=args.devices,
+                        save_every=args.save_every)
         print(dumps(summary), file=sys.stderr)
         if args.no_eval:
             return 0
@@ -427,6 +435,9 @@ def _add_run_args(p: argparse.ArgumentParser, out_help: str) -> None:
     p.add_argument("--iterations", type=positive, help="override CONFIG.iterations (total, counting resumed ones)")
     p.add_argument("--seed", type=int)
     p.add_argument("--max-minutes", type=positive_float, help="stop (with a checkpoint) after this much wall time")
+    p.add_argument("--save-every", type=seconds, default=SAVE_EVERY_S, metavar="SECONDS",
+                   help="write the checkpoints at most this often (default: %(default)s; 0: after every chunk of "
+                        "iterations), and when the run stops (at its end, --max-minutes, a first Ctrl-C or SIGTERM)")
     p.add_argument("--stop-after-calls", type=positive, help=argparse.SUPPRESS)
     p.add_argument("--devices", type=positive, help="devices that share the envs (default: every device, of every "
                                                     "host with --distributed)")
@@ -437,7 +448,7 @@ def _add_run_args(p: argparse.ArgumentParser, out_help: str) -> None:
     p.add_argument("--num-processes", type=positive)
     p.add_argument("--process-id", type=int)
     p.add_argument("--physics", choices=E.PHYSICS, help="MJX's implementation, as --set env.physics=... (default: "
-                                                        "the config's, auto: Warp on one GPU where installed)")
+                                                        "the config's, auto: Warp on a GPU where installed)")
 
 
 CONFIG_HELP = ("a config: the name of one in dexguitar/configs/ (e.g. left_gpu, sync_hold, cpu_smoke) or a .py file "

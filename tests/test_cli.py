@@ -193,3 +193,12 @@ def test_the_shipped_policies_are_found_in_one_place(tmp_path, monkeypatch):
     assert (shipped.policies_dir() / "left_general" / "policy.json").exists()
     monkeypatch.setenv(shipped.POLICIES_ENV, str(tmp_path))
     assert shipped.policies_dir() == tmp_path
+
+
+@pytest.mark.parametrize("argv, every", [([], 60.0), (["--save-every", "0"], 0.0), (["--save-every", "300"], 300.0)])
+def test_save_every_reaches_the_training_loop(argv, every, tmp_path, monkeypatch):
+    from dexguitar import cli
+    seen = {}
+    monkeypatch.setattr(cli, "train", lambda trainer, out, **kw: seen.update(kw) or {"iteration": 0})
+    assert main(["train", "--song", "ode_to_joy", "--config", "cpu_smoke", "--out", str(tmp_path / "r")] + argv) == 0
+    assert seen["save_every"] == every

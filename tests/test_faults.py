@@ -7,7 +7,9 @@ import errno
 import gc
 import json
 import logging
+import os
 import shutil
+import signal
 
 import jax
 import jax.numpy as jnp
@@ -61,7 +63,7 @@ def test_nonfinite_parameters_roll_back_and_are_never_saved(trainer, tmp_path, m
             calls) == 1 else state
     monkeypatch.setattr(trainer, "init", init_poisoned_once)
     messages = []
-    RUN.train(trainer, tmp_path / "run", iterations=2, progress=False, log=messages.append)
+    RUN.train(trainer, tmp_path / "run", iterations=2, progress=False, save_every=0, log=messages.append)
     assert any("rolled back" in m for m in messages)
     # every saved step and the export are finite, and the run still reached its iterations
     steps = C.steps(tmp_path / "run" / "ckpt")
@@ -145,7 +147,7 @@ def test_a_resumed_run_goes_past_its_damaged_newest_checkpoint(trainer, tmp_path
     before, sets the damaged one aside and trains that iteration again (a step orbax would refuse to write where it
     exists)."""
     run = tmp_path / "run"
-    RUN.train(trainer, run, iterations=2, progress=False, log=lambda m: None)
+    RUN.train(trainer, run, iterations=2, progress=False, save_every=0, log=lambda m: None)
     files = [f for f in (run / "ckpt" / "2").rglob("*") if f.is_file()]
     _damage(max(files, key=lambda f: f.stat().st_size), "halved")
     messages = []
@@ -237,7 +239,7 @@ def test_a_run_that_fills_the_disk_stops_in_one_line_and_resumes(trainer, tmp_pa
     run = tmp_path / "run"
     full = FullDisk(monkeypatch, run / "ckpt", full=2)
     with pytest.raises(RunError) as err:
-        RUN.train(trainer, run, iterations=2, progress=False, log=lambda m: None)
+        RUN.train(trainer, run, iterations=2, progress=False, save_every=0, log=lambda m: None)
     assert full.hits
     assert str(err.value).startswith(f"{run}: the disk is full") and "step 1, is kept" in str(err.value)
     assert sorted(p.name for p in (run / "ckpt").iterdir()) == ["1"]
@@ -263,7 +265,7 @@ def test_a_full_disk_while_writing_metrics_is_one_error(trainer, tmp_path, monke
         return real_open(path, mode, *args, **kwargs)
     monkeypatch.setattr("builtins.open", full_open)
     with pytest.raises(RunError, match=r"the disk is full .* step 1, is kept"):
-        RUN.train(trainer, run, iterations=2, progress=False, log=lambda m: None)
+        RUN.train(trainer, run, iterations=2, progress=False, save_every=0, log=lambda m: None)
     monkeypatch.undo()
     assert C.steps(run / "ckpt") == [1] and C.steps(run / "resume") == [1]
 
@@ -284,6 +286,47 @@ def test_a_resume_without_a_checkpoint_starts_afresh_and_says_so(trainer, tmp_pa
     assert [m for m in messages if "no checkpoint" in m] == [f"{run} holds no checkpoint yet: the run starts again "
                                                               "from iteration 0"]
     assert int(seen["state"].iteration) == 0 and (run / "metrics.jsonl").read_text() == ""
+
+
+@pytest.mark.parametrize("save_every, rows_saved, kept", [(1e9, [3], [3]), (0.0, [1, 2, 3], [3, 2])])
+def test_checkpoints_are_written_every_save_every_seconds_and_at_the_end(trainer, tmp_path, save_every, rows_saved,
+                                                                           kept):
+    """Metrics and the export after every call of one iteration; the checkpoints after the first call that comes
+    `save_every` seconds after the last save (never, here, at 1e9 s: the last call alone) and at the end. The
+    whole states keep the newest two steps, the compact one the newest."""
+    run = tmp_path / "run"
+    RUN.train(trainer, run, iterations=3, progress=False, log=lambda m: None, save_every=save_every)
+    rows = [json.loads(r) for r in (run / "metrics.jsonl").read_text().splitlines()]
+    assert [r["iteration"] for r in rows] == [1, 2, 3]
+    assert [r["iteration"] for r in rows if "ckpt_s" in r and "compact_s" in r] == rows_saved
+    assert C.steps(run / "ckpt") == kept and C.steps(run / "resume") == [3]
+    assert (run / "policy" / "policy.json").exists()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_first_signal_stops_the_run_after_its_chunk_with_a_checkpoint(trainer, tmp_path, sig):
+    """A Ctrl-C (or a SIGTERM) while a chunk runs: that chunk ends, is saved, and the run stops (KeyboardInterrupt,
+    as `dexguitar` reports it); --resume goes on from it. Sent here while the first call's export is judged, so the
+    second call is the one that stops."""
+    run, messages = tmp_path / "run", []
+
+    def on_call(it):
+        if it == 1:
+            os.kill(os.getpid(), sig)
+        return False
+    before = signal.getsignal(sig)
+    with pytest.raises(KeyboardInterrupt):
+        RUN.train(trainer, run, iterations=5, progress=False, log=messages.append, save_every=1e9, on_call=on_call)
+    name = signal.Signals(sig).name
+    assert [m for m in messages if m.startswith(name)] == [
+        f"{name}: stopping after this chunk with a checkpoint (Ctrl-C again stops at once)",
+        f"{name}: stopped at iteration 2, saved (continue with --resume)"]
+    assert signal.getsignal(sig) is before
+    assert C.steps(run / "ckpt") == [2]
+    assert [json.loads(r)["iteration"] for r in (run / "metrics.jsonl").read_text().splitlines()] == [1, 2]
+    messages.clear()
+    assert RUN.train(trainer, run, iterations=3, resume=True, progress=False, log=messages.append)["iteration"] == 3
+    assert any(m.startswith(f"resumed {run} at iteration 2") for m in messages)
 
 
 def test_a_background_save_holds_what_was_saved_while_a_donating_step_reuses_the_buffers(tmp_path):
@@ -354,7 +397,7 @@ def test_a_run_resumes_on_another_machine_from_its_compact_state(trainer, tmp_pa
     """`resume/` alone (what a device call brings back, without `ckpt/`) continues the run: networks, normalizers,
     key, iteration and the optimizers' scalars as saved; envs, replay buffers and Adam's moments fresh."""
     run = tmp_path / "run"
-    RUN.train(trainer, run, iterations=2, progress=False, log=lambda m: None)
+    RUN.train(trainer, run, iterations=2, progress=False, save_every=0, log=lambda m: None)
     rows = [json.loads(r) for r in (run / "metrics.jsonl").read_text().splitlines()]
     # each row times its two saves; the wall clock between two rows holds the first one's saves and the second's chunk
     assert all(r["ckpt_s"] > 0 and r["compact_s"] > 0 for r in rows)
@@ -495,7 +538,7 @@ def test_every_command_refuses_bad_paths_in_one_line(argv, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv", [["train", "--envs", "0"], ["train", "--iterations", "-1"],
-                                  ["train", "--max-minutes", "0"]])
+                                  ["train", "--max-minutes", "0"], ["sync", "--save-every", "-1"]])
 def test_impossible_numbers_are_refused_by_the_parser(argv, capsys):
     with pytest.raises(SystemExit) as exit_:
         main(argv + ["--out", "x"])

@@ -3,8 +3,9 @@ only logs and saves; all learning happens inside the jitted chunk.
 
 A run directory holds `config.json` (how the run was made: compared on --resume), `ckpt/` (the last few whole train
 states), `resume/` (the last compact state: what a run cannot rebuild, to carry a long run from machine to machine),
-`metrics.jsonl` (one row per host call, written while its checkpoints are still being written: --resume drops the
-rows past the checkpoint it restores, all of them where there is none) and `policy/` (the export). A lock file keeps a
+`metrics.jsonl` (one row per host call: --resume drops the rows past the checkpoint it restores, all of them where
+there is none) and `policy/` (the export, after every host call). The checkpoints are written at most every
+`SAVE_EVERY_S` seconds and when the run stops, in the background while training goes on. A lock file keeps a
 second process out of a directory in use. Non-finite parameters are never saved: the run rolls back to its last good
 checkpoint with a new random key and stops after repeated failures. A full disk ends the run with one error naming
 the run and its newest complete checkpoint, from which --resume continues.
@@ -17,7 +18,9 @@ import fcntl
 import hashlib
 import json
 import os
+import signal
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -35,6 +38,7 @@ from dexguitar.learn.trainer import Trainer, TrainConfig
 SUMMED = ("episodes", "terminations")      # counts (and notes/*, nonfinite/*); f1/* are sums over notes
 MAX_ROLLBACKS = 3                          # non-finite states in a row before giving up
 CPU_ENVS = 512                             # envs from which `train` warns of XLA:CPU's LAPACK deadlock
+SAVE_EVERY_S = 60.0                        # the whole and the compact state are saved at most this often, and at a stop
 RESUME_FREE = ("iterations", "iterations_per_call")   # may change on --resume; nothing else may
 TRAIN_DEFAULTS = {f.name: f.default for f in dataclasses.fields(TrainConfig)}
 # EnvConfig fields newer than the runs that lack them, with the value those runs had (their envs ran MJX's JAX physics)
@@ -226,11 +230,14 @@ def check_init(init_from, hand: str, feedforward: bool, scale: float = 1.0) -> d
 
 def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, progress: bool = True,
           meta: dict | None = None, stop_after_calls: int | None = None, max_minutes: float | None = None,
-          init_from=None, on_call=None, devices: int | None = None, log=None) -> dict:
-    """Run until `iterations` iterations are done (counting those of a resumed run), `max_minutes` have passed, or
-    `on_call(iteration)`, called after each host call's export, returns True (the pipeline judges the export there).
-    Returns the last summary, with `compile_s` (the first call's compilation) and `calls`. `devices`: how many
-    devices share the envs (default: the trainer's)."""
+          init_from=None, on_call=None, devices: int | None = None, log=None, save_every: float = SAVE_EVERY_S) -> dict:
+    """Run until `iterations` iterations are done (counting those of a resumed run), `max_minutes` have passed,
+    `on_call(iteration)`, called after each host call's export, returns True (the pipeline judges the export there), or
+    a SIGINT or SIGTERM asks it to stop (`stop_requests`; then KeyboardInterrupt, once saved). Returns the last
+    summary, with `compile_s` (the first call's compilation) and `calls`. `devices`: how many devices share the envs
+    (default: the trainer's). The metrics and the policy export are written after every host call, the checkpoints
+    when `save_every` seconds have passed since the last (0: after every call; a run of several processes saves after
+    every call) and when the run stops."""
     cfg = trainer.config
     where = Placement(devices or trainer.devices)
     if where.n != trainer.devices:     # its envs are reset in groups, one per device, with Warp's buffers sized so
@@ -288,7 +295,8 @@ def train(trainer: Trainer, out_dir, *, iterations: int, resume: bool = False, p
             log(f"{where.n} devices: {cfg.num_envs // where.n} envs and minibatches of {cfg.minibatch // where.n} "
                 f"samples each")
         return _loop(trainer, run, where, where.put(state, shardings), data, build, iterations,
-                     progress and where.main, stop_after_calls, max_minutes, on_call, log)
+                     progress and where.main, stop_after_calls, max_minutes, on_call, log,
+                     save_every if jax.process_count() == 1 else 0.0)
     except (OSError, C.DiskFull) as err:     # the saves are complete or abandoned by now: say which step is kept
         if isinstance(err, OSError) and not C.disk_full(err):
             raise
@@ -304,7 +312,7 @@ def chunk_build(trainer, where, data, log) -> ChunkBuild:
 
 
 def _loop(trainer, run, where, state, data, build, iterations, progress, stop_after_calls, max_minutes, on_call,
-          log) -> dict:
+          log, save_every) -> dict:
     cfg = trainer.config
     n = cfg.iterations_per_call
     if int(state.iteration) >= iterations:
@@ -318,12 +326,23 @@ def _loop(trainer, run, where, state, data, build, iterations, progress, stop_af
         from tqdm import tqdm          # noqa: PLC0415 - only for a progress display
         bar = tqdm(total=iterations, initial=int(state.iteration), unit="it", dynamic_ncols=True, file=sys.stderr,
                    mininterval=0.1 if sys.stderr.isatty() else 30.0)     # a log file gets a line every 30 s
-    summary, calls, rollbacks = {}, 0, 0
+        say = log
+        log = lambda msg: (bar.clear(), say(msg), bar.refresh())  # noqa: E731 - a line of its own, not the bar's
+    summary, calls, rollbacks, saved_at, asked = {}, 0, 0, time.perf_counter(), None
     # the saves and the export of one chunk are written while the next one runs; leaving the block (the end, an
     # error, Ctrl-C) waits until they are complete on disk
     with C.Saver(run.ckpt) as ckpt, C.Saver(run.compact, keep=1, only=compact) as resume_state, \
             (C.Saver(run.path / "policy" / "params", keep=1) if where.main else contextlib.nullcontext()) as policy, \
-            (bar if bar is not None else contextlib.nullcontext()):     # closed first: an error's line stands alone
+            (bar if bar is not None else contextlib.nullcontext()), stop_requests(log) as requested:
+        def save(it, state) -> dict:
+            """The saves' blocking seconds (copying to the host, waiting for the writes before): saved whole every
+            chunk, they cost 0.71 s of a 3.6 s chunk under Warp on one H200 (docs/benchmarks.md, "Several GPUs")."""
+            t = time.perf_counter()
+            ckpt.save(it, state)
+            t2 = time.perf_counter()
+            resume_state.save(it, state)
+            return {"ckpt_s": t2 - t, "compact_s": time.perf_counter() - t2}
+
         while int(state.iteration) < iterations:
             t0 = time.perf_counter()
             new, metrics = chunk(state, data)
@@ -350,18 +369,19 @@ def _loop(trainer, run, where, state, data, build, iterations, progress, stop_af
             t1 = time.perf_counter()
             summary.update(iteration=it, samples=it * cfg.batch, seconds=dt, samples_per_s=n * cfg.batch / dt,
                            wall=t1 - t_start, compile_s=compile_s)
-            ckpt.save(it, state)
-            t2 = time.perf_counter()
-            resume_state.save(it, state)
-            # the saves' blocking seconds (copying to the host, waiting for the chunk before's writes), outside
-            # `seconds` and before the next row's `wall` (saved whole before the writes went to the background, they
-            # cost 1.35 s a chunk on one H100 and 3.8 s on 4: docs/benchmarks.md, "Several GPUs")
-            summary.update(ckpt_s=t2 - t1, compact_s=time.perf_counter() - t2)
+            calls += 1
+            asked = requested()
+            quota = stop_after_calls is not None and calls >= stop_after_calls
+            late = max_minutes is not None and t1 - t_start > 60 * max_minutes
+            stop = it >= iterations or asked or quota or late
+            saved = stop or t1 - saved_at >= save_every
+            if saved:
+                summary.update(save(it, state))
+                saved_at = time.perf_counter()
             if where.main:
                 with open(run.metrics, "a") as f:
                     f.write(json.dumps(summary) + "\n")
                 export(trainer, state, run.path / "policy", policy)
-            calls += 1
             if bar is not None:
                 hands = trainer.env.roles + (("both",) if len(trainer.env.roles) == 2 else ())
                 reward = np.mean([v for k, v in summary.items() if k.startswith("reward/")])
@@ -369,16 +389,47 @@ def _loop(trainer, run, where, state, data, build, iterations, progress, stop_af
                                  **{f"F1 {h}": f"{summary.get('f1/' + h, float('nan')):.3f}" for h in hands},
                                  "reward": f"{reward:.3f}"})
                 bar.update(n)
-            if stop_after_calls is not None and calls >= stop_after_calls:
-                break
-            if on_call is not None and where.main:
+            if not (quota or asked) and on_call is not None and where.main:
                 policy.wait()                                   # on_call judges the export: complete on disk
                 if on_call(it):
+                    if not saved:
+                        save(it, state)
                     break
-            if max_minutes is not None and time.perf_counter() - t_start > 60 * max_minutes:
+            if asked:
+                log(f"{asked}: stopped at iteration {it}, saved (continue with --resume)")
+            elif late:
                 log(f"stopping after {max_minutes} minutes at iteration {it} (resume with --resume)")
+            if stop:
                 break
+    if asked:
+        raise KeyboardInterrupt
     return dict(summary, compile_s=compile_s, calls=calls)
+
+
+@contextlib.contextmanager
+def stop_requests(log):
+    """Within the block, a first SIGINT (Ctrl-C) or SIGTERM asks the training loop to stop after the chunk that runs,
+    with its checkpoints; a second SIGINT stops at once (KeyboardInterrupt), as without the block. Yields a function:
+    the name of the first signal received, or None. Where Python takes no signals (a thread other than the main one)
+    or the run has several processes (which would stop at different chunks), the signals stay as they were."""
+    asked = []
+    if threading.current_thread() is not threading.main_thread() or jax.process_count() > 1:
+        yield lambda: None
+        return
+
+    def handler(signum, frame):
+        if asked and signum == signal.SIGINT:
+            raise KeyboardInterrupt
+        if not asked:
+            log(f"{signal.Signals(signum).name}: stopping after this chunk with a checkpoint (Ctrl-C again stops at "
+                "once)")
+        asked.append(signal.Signals(signum).name)
+    before = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield lambda: asked[0] if asked else None
+    finally:
+        for s, h in before.items():
+            signal.signal(s, h)
 
 
 def _rollback(trainer, run, where, attempt: int):
