@@ -1,8 +1,9 @@
 """Faults survived and bad input refused (issue #14): non-finite numbers in training, a damaged checkpoint, a save
 written in the background while training goes on or killed half-written, a full disk, a run directory in use or made
-with another setup, a kill between a checkpoint and its metrics row or before the first checkpoint, and every command
-given bad paths: one line and exit code 2, never a traceback. The training runs share the tiny left-hand trainer of
-tests/test_learn.py (same program, so the persistent compilation cache serves it)."""
+with another setup, a kill between a checkpoint and its metrics row or before the first checkpoint, a Ctrl-C or SIGTERM
+while training (the chunk ends and is saved), and every command given bad paths: one line and exit code 2, never a
+traceback. The training runs share the tiny left-hand trainer of tests/test_learn.py (same program, so the
+persistent compilation cache serves it)."""
 import errno
 import gc
 import json
