@@ -335,8 +335,8 @@ def _loop(trainer, run, where, state, data, build, iterations, progress, stop_af
             (C.Saver(run.path / "policy" / "params", keep=1) if where.main else contextlib.nullcontext()) as policy, \
             (bar if bar is not None else contextlib.nullcontext()), stop_requests(log) as requested:
         def save(it, state) -> dict:
-            """The saves' blocking seconds (copying to the host, waiting for the writes before): saved whole every
-            chunk, they cost 0.71 s of a 3.6 s chunk under Warp on one H200 (docs/benchmarks.md, "Several GPUs")."""
+            """The saves' blocking seconds (copying to the host, waiting for the writes before): saved after every
+            chunk, they took about 0.7 s of each 3.6 s under Warp on one H200 (docs/benchmarks.md, "Several GPUs")."""
             t = time.perf_counter()
             ckpt.save(it, state)
             t2 = time.perf_counter()
