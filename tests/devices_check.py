@@ -43,7 +43,8 @@ x = chunk(jnp.arange(8, dtype=jnp.float32) / 8, data)[0]
 where = Placement(4)
 each = jax.jit(where.each(lambda a: a - a[:1]))(jax.device_put(jnp.arange(8.0), where.split))
 print(json.dumps({"each": each.tolist(), "each_devices": len(each.devices()),
-                  "shardy": jax.config.jax_use_shardy_partitioner,"devices": len(jax.devices()), "dot_rows": dot_rows, "stub": hows, "stub_out": x.tolist(),
+                  "shardy": jax.config.jax_use_shardy_partitioner, "devices": len(jax.devices()),
+                  "dot_rows": dot_rows, "stub": hows, "stub_out": x.tolist(),
                   "stub_devices": sorted(d.id for d in x.devices()),
                   "split": [m for m in messages if m.startswith("4 devices")],
                   "chunks": [m.split(" the training chunk")[0] for m in messages if "the training chunk" in m]}))
