@@ -312,7 +312,7 @@ class Trainer:
         """`horizon` steps of every env; over several devices (`placement`), each device steps its own envs."""
         act = act_fn(self.spec, deterministic=False)
         actor = self.actor_params(ts.params, ts.obs_norm)
-        step = (placement or Placement(1)).each(jax.vmap(env.step))
+        step = jax.vmap(env.step) if placement is None else placement.each(jax.vmap(env.step))
 
         def one(env_state, k):
             action, logp, _ = act(actor, env_state.obs, k)
