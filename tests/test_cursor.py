@@ -123,6 +123,31 @@ def test_training_windows_are_augmented_as_a_whole():
     assert len(sixteenths) >= 3
 
 
+def note_coverage(even_notes, keys=4000):
+    """The share of training windows (U{4..7}: 3..6 notes) of `long_song` (30 notes) that hold each note."""
+    songs = songs_of(long_song())
+    draw = jax.jit(jax.vmap(lambda k: CU.sample_window(songs, k, 16, sequential=False, window_notes=(4, 8),
+                                                       even_notes=even_notes)))
+    w = draw(jax.random.split(jax.random.PRNGKey(4), keys))
+    first, notes = np_(w.first), np_(w.n) - 1
+    song_left = np_(songs.left[0])
+    for i in range(0, keys, 97):                                  # consecutive notes of the song, a rest before them
+        assert notes[i] >= 1 and first[i] >= 0 and first[i] + notes[i] <= 30
+        np.testing.assert_array_equal(np_(w.left)[i, 1:notes[i] + 1], song_left[first[i]:first[i] + notes[i]])
+        assert not np_(w.left)[i, 0].any() and not np_(w.left)[i, notes[i] + 1:].any()
+    held = (np.arange(30)[None, :] >= first[:, None]) & (np.arange(30)[None, :] < (first + notes)[:, None])
+    return held.mean(axis=0)
+
+
+def test_training_windows_hold_the_first_and_last_notes_less_unless_even():
+    # m notes a window, m ~ U{3..6}. The paper's start ~ U{0..30-m}: note 0 lies in 1 of 31-m windows, a middle note
+    # in m of them: means over m 0.0378 and 0.1719. Even: start ~ U{1-m..29}, every note in m of 29+m: 0.1334.
+    paper = note_coverage(False)
+    np.testing.assert_allclose(paper[[0, 29]], 0.0378, atol=0.01)
+    np.testing.assert_allclose(paper[6:24], 0.1719, atol=0.02)
+    np.testing.assert_allclose(note_coverage(True), 0.1334, atol=0.02)
+
+
 def test_tempo_change_never_below_30_bpm():
     # 1/16 notes at 35 BPM: 900 / 35 = 25.7 -> 26 frames; 35 - 20 = 15 BPM is raised to 30: at most 900 / 30 = 30
     songs = songs_of(Song(35, [make_note(F(1, 16), (0, X, X, X, X, X))] * 12))

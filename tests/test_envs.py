@@ -100,6 +100,20 @@ def test_training_window_is_a_rest_then_song_notes(left):
         np.testing.assert_array_equal(lft[1:n][~pressed], code[~pressed])  # open and mute strings stay
 
 
+def test_even_notes_reaches_the_training_windows():
+    keys = jax.random.split(jax.random.PRNGKey(5), 200)
+    first, notes = {}, {}
+    for even in (False, True):
+        env = envs.make("left", [scale_song()], episode_frames=12, window_notes=(3, 5), even_notes=even)
+        w = jax.jit(jax.vmap(env.sample_window))(keys)
+        first[even], notes[even] = np.asarray(w.first), np.asarray(w.n) - 1
+        assert (first[even] + notes[even] <= 8).all()
+    # 2 or 3 of the song's 8 notes a window: the paper's windows are whole, so none starts at the last note; even
+    # starts run to the last note (1/9 or 1/10 of the windows) and cut those windows to one note
+    assert set(notes[False].tolist()) == {2, 3} and first[False].max() == 6
+    assert first[True].max() == 7 and (notes[True][first[True] == 7] == 1).all()
+
+
 def test_evaluation_plays_the_song_from_its_start_and_stops():
     from dexguitar.perform.scripted import ScriptedPlayer
     song = scale_song()

@@ -69,6 +69,8 @@ class EnvConfig:
     pick_depth: float = 0.001            # a valid pick passes >= 1 mm below the string in training (§5.2)
     init_noise: float = 0.02             # uniform noise on the home pose at reset (m / rad)
     fill_strum_gaps: bool = True         # strings between the outer targets of a strum are targets too (§3.6)
+    even_notes: bool = False             # not in the paper: every note of a song in as many training windows as any
+                                         # other, its first and last ones too (`cursor.sample_window`)
     sequential: bool = False             # evaluation: whole songs from the start, episode ends with the song
     ready_after: int = -1                # duet gate: -1 = the paper's strict gate; k >= 0 = relaxed after k frames
     hold_reward: float = 0.0             # duet, not in the paper: added to the pick column per string whose
@@ -115,7 +117,7 @@ class EnvConfig:
         """The keyword arguments of `cursor.sample_window`."""
         return {k: getattr(self, k) for k in ("sequential", "window_notes", "rest_frames", "max_note_frames",
                                               "min_frames", "shift_prob", "tempo_prob", "tempo_delta",
-                                              "fill_strum_gaps")}
+                                              "fill_strum_gaps", "even_notes")}
 
 
 @struct.dataclass

@@ -90,10 +90,14 @@ def shift_frets(left, frets, valid, key, prob: float):
 def sample_window(songs: TL.Timeline, key, capacity: int, *, sequential: bool, window_notes=(10, 20),
                   rest_frames: int = 5, max_note_frames: int = 50, min_frames: int = 5, shift_prob: float = 0.0,
                   tempo_prob: float = 0.0, tempo_delta: int = 20, fill_strum_gaps: bool = True,
-                  song=None) -> Window:
+                  even_notes: bool = False, song=None) -> Window:
     """A window of `capacity` rows. Training: a rest + n-1 notes (n ~ U{window_notes}) of a random song from a
     random start, augmented. Sequential: a rest, then song `song` whole from its start (the authors' grace rest:
-    the first note is not judged before the hand has had time to move)."""
+    the first note is not judged before the hand has had time to move).
+
+    The paper's start is uniform over the starts of whole windows of m = n-1 notes, so a song's first and last notes
+    lie in 1/m as many windows as its middle notes. `even_notes` draws the start over the m-1 positions before the
+    song as well and cuts the window at the song's ends: every note then lies in as many windows as any other."""
     k_song, k_len, k_start, k_shift, k_tempo, k_p = jax.random.split(key, 6)
     if song is None:
         song = jax.random.categorical(k_song, song_weights(songs))
@@ -103,7 +107,12 @@ def sample_window(songs: TL.Timeline, key, capacity: int, *, sequential: bool, w
         n, first = n_song, jnp.int32(0)
     else:
         n = jnp.minimum(jax.random.randint(k_len, (), window_notes[0], window_notes[1]) - 1, n_song)
-        first = jax.random.randint(k_start, (), 0, jnp.maximum(n_song - n, 0) + 1)
+        if even_notes:                     # starts 1-m .. N-1 (n is m here), the window cut to the song
+            at = jax.random.randint(k_start, (), 1 - n, n_song)
+            first = jnp.maximum(at, 0)
+            n = jnp.minimum(at + n, n_song) - first
+        else:
+            first = jax.random.randint(k_start, (), 0, jnp.maximum(n_song - n, 0) + 1)
     valid = jnp.arange(capacity - 1) < n
     idx = jnp.clip(first + jnp.arange(capacity - 1), 0, songs.left.shape[1] - 1)
 
