@@ -280,10 +280,11 @@ class Trainer:
             env=env_state, key=key, iteration=jnp.int32(0))
 
     def reset_envs(self, env, keys):
-        """The envs reset from `keys` in as many groups as the run has devices, joined along their first axis: each
-        group holds the Warp buffers that its device steps it with (`Placement.each`; sized for a group of envs,
-        `EnvConfig.sized`). Under JAX every leaf is per env, and the groups joined are the envs reset at once."""
-        groups = [jax.vmap(env.reset)(k) for k in jnp.split(keys, self.devices)]
+        """The envs reset from `keys`. Under Warp in as many groups as the run has devices, joined along their first
+        axis: each group holds the Warp buffers that its device steps it with (`Placement.each`; sized for a group of
+        envs, `EnvConfig.sized`). Under JAX every leaf is per env, so one reset of them all is the same state, traced
+        once instead of once per device."""
+        groups = [jax.vmap(env.reset)(k) for k in jnp.split(keys, self.devices if env.physics == "warp" else 1)]
         return groups[0] if len(groups) == 1 else jax.tree.map(lambda *x: jnp.concatenate(x), *groups)
 
     # ------------------------------------------------------------------------------------------ pieces
