@@ -65,14 +65,11 @@ class StubTrainer:
         self.config, self.env, self.spec, self.traced = StubConfig(scale, **config), StubEnv(), "stub", 0
 
     def make_train_chunk(self, n, where):
+        from dexguitar.learn.stages import Stages
         self.traced += 1
         scale = self.config.scale
-
-        def chunk(state, data):
-            for _ in range(n):
-                state = jnp.tanh(state * scale + data)
-            return state, {"sum": jnp.sum(state)}
-        return jax.jit(chunk)
+        return Stages([jax.jit(lambda state, data: jnp.tanh(state * scale + data)),      # n iterations of two
+                       jax.jit(lambda state, data: (state, {"sum": jnp.sum(state)}))], n)
 
 
 class StubEnv:
@@ -212,7 +209,8 @@ def test_two_songs_of_a_capacity_share_one_program_whatever_was_traced_between(t
 
     def lowered(t):     # (characters, private functions, digest) of the chunk `train` compiles for t
         state = where.placed_shapes(jax.eval_shape(t.init))      # as `train` places it, without computing it
-        text = t.make_train_chunk(1, where).lower(state, where.put(t.data, where.replicated(t.data))).as_text()
+        text = "".join(program.as_text() for program in
+                       t.make_train_chunk(1, where).lower(state, where.put(t.data, where.replicated(t.data))))
         return len(text), text.count("func.func private"), hashlib.sha1(text.encode()).hexdigest()
     first = lowered(trainer)
     # what the judge does between two songs, in small: trace a step of an evaluation env (this alone gave the old

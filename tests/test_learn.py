@@ -100,6 +100,33 @@ def test_normalizer_merges_batches_exactly():
     assert np.all(np.abs(np.asarray(stats["var"]) - 4.0) < 0.5) and all_.shape == (1001, 4)
 
 
+def test_a_flat_step_is_the_optimizer_on_every_array_and_a_nonfinite_one_changes_nothing():
+    from jax.flatten_util import ravel_pytree
+
+    from dexguitar.learn.trainer import flat_step
+    params = {"a": {"kernel": jnp.ones((2, 3))}, "b": jnp.array([0.5, -1.0])}
+    grads = [{"a": {"kernel": jnp.full((2, 3), 3.0)}, "b": jnp.array([-4.0, 0.0])},     # norm sqrt(70): clipped
+             {"a": {"kernel": jnp.full((2, 3), -0.1)}, "b": jnp.array([0.2, 0.3])}]     # norm 0.39: not clipped
+    opt = optax.chain(optax.clip_by_global_norm(1.0), optax.adam(0.1))
+    state = opt.init(ravel_pytree(params)[0])
+    p1, state = flat_step(opt, params, ravel_pytree(grads[0])[0], state, jnp.bool_(True))
+    # Adam's first step is the rate times the gradient's sign, whatever the clip's scale; a zero gradient stays
+    np.testing.assert_allclose(p1["a"]["kernel"], np.full((2, 3), 0.9), rtol=1e-5)
+    np.testing.assert_allclose(p1["b"], [0.6, -1.0], rtol=1e-5)
+    p2, state = flat_step(opt, p1, ravel_pytree(grads[1])[0], state, jnp.bool_(True), scale=0.5)
+    # the same optimizer on the arrays as they are, its second step halved
+    tree_state = opt.init(params)
+    u, tree_state = opt.update(grads[0], tree_state, params)
+    u, _ = opt.update(grads[1], tree_state, optax.apply_updates(params, u))
+    want = jax.tree.map(lambda p, d: p + 0.5 * d, p1, u)
+    jax.tree.map(lambda a, b: np.testing.assert_allclose(a, b, rtol=1e-6), p2, want)
+    # a step skipped: the parameters and every part of the state as they were, Adam's count too
+    bad = ravel_pytree(grads[1])[0].at[0].set(jnp.nan)
+    p3, state3 = flat_step(opt, p2, bad, state, jnp.bool_(False))
+    assert jax.tree.all(jax.tree.map(np.array_equal, (p3, state3), (p2, state)))
+    assert int(state3[1][0].count) == 2
+
+
 def test_gru_is_flax_gru_cell_over_the_frames():
     """networks.GRU joins the cell's six gate kernels into two products: the same parameters (names, shapes and initial
     values) as `nn.GRUCell` and the same output as the cell stepped over the frames from a zero state."""
@@ -256,6 +283,35 @@ def test_training_iterations_and_exact_resume(trainer, tmp_path, compiled_chunk)
     assert all(jax.tree.leaves(same)) and int(resumed.iteration) == 2
 
 
+def test_the_stages_as_programs_train_as_one_scanned_program(trainer, compiled_chunk):
+    """By default an iteration's three stages are programs of their own (`learn.stages`); `one_program` scans whole
+    iterations in one program. From one state both make the same next state and metrics, up to the order of float
+    sums."""
+    from dexguitar.learn.trainer import Trainer
+    from dexguitar.motion import load_motion
+    from dexguitar.motion.kinematics import reference_frames
+    one = Trainer(dataclasses.replace(trainer.config, one_program=True), trainer.env.songs,
+                  reference_frames(load_motion("left")))
+    start = jax.device_get(trainer.init())
+    staged, state, data, _ = compiled_chunk(trainer, start)
+    scanned, state_one, data_one, _ = compiled_chunk(one, start)
+    assert len(staged.programs) == 3 and len(scanned.programs) == 1
+    (a, metrics), (b, metrics_one) = staged(state, data), scanned(state_one, data_one)
+    assert int(a.iteration) == int(b.iteration) == 1 and metrics.keys() == metrics_one.keys()
+
+    def same(x, y):
+        x, y = np.asarray(x), np.asarray(y)
+        if np.issubdtype(x.dtype, np.inexact):
+            np.testing.assert_allclose(x, y, rtol=1e-5, atol=1e-6)
+        else:
+            np.testing.assert_array_equal(x, y)
+    jax.tree.map(same, jax.device_get(a), jax.device_get(b))
+    jax.tree.map(same, metrics, metrics_one)
+    moved = jax.tree.map(lambda x, y: float(np.abs(np.asarray(x) - y).max()), jax.device_get(a.params["policy"]),
+                         start.params["policy"])
+    assert max(jax.tree.leaves(moved)) > 0                     # an iteration that learned, not two that did nothing
+
+
 def kl_update(trainer, iteration=0, adv=1.0, **config):
     """(config, parameters before, after, optimizer state after, log) of one jitted PPO update of a KL-target
     trainer (rate 1e-3) on a random batch whose log-probabilities are the acting policy's (so its first KL is 0),
@@ -273,8 +329,7 @@ def kl_update(trainer, iteration=0, adv=1.0, **config):
     lay = tr.layout
     critic = N.init_params(tr.critic, k[1], (lay.history, lay.frame_size), (lay.goal_size + lay.privileged,))
     params = {"policy": policy, "critic": critic}
-    opt = {name: tr.optimizers[name].init(params[name]) for name in ("policy", "critic")}
-    opt["lr"] = jnp.float32(1e-3)
+    opt = tr.optimizer_states(params)                                  # with the rate, 1e-3
     n = cfg.batch
     obs = jax.random.normal(k[2], (n, lay.obs_size))
     action = jax.random.normal(k[3], (n, tr.env.action_size)) * 0.1

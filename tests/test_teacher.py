@@ -133,7 +133,7 @@ def _update(trainer, labels, batch_size=64):
     critic = N.init_params(trainer.critic, key, (layout.history, layout.frame_size),
                            (layout.goal_size + layout.privileged,))
     params = {"policy": policy, "critic": critic}
-    opt = {k: trainer.optimizers[k].init(params[k]) for k in params}
+    opt = trainer.optimizer_states(params)
     obs = jax.random.normal(key, (batch_size, layout.obs_size))
     mu0, log_std0 = distribution(trainer.spec, trainer.actor_params(params, obs_norm), obs)
     batch = {"obs": obs, "privileged": jnp.ones((batch_size, layout.privileged)), "action": mu0,

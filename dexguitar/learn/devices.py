@@ -66,6 +66,12 @@ class Placement:
         return NamedSharding(self.mesh, PartitionSpec("envs"))
 
     @property
+    def steps(self) -> NamedSharding:
+        """Split along the second axis over the devices: a rollout's arrays (steps, envs, ...) between the stages of
+        an iteration (`learn.stages`)."""
+        return NamedSharding(self.mesh, PartitionSpec(None, "envs"))
+
+    @property
     def whole(self) -> NamedSharding:
         """Replicated on every device of the mesh."""
         return NamedSharding(self.mesh, PartitionSpec())

@@ -1,8 +1,9 @@
-"""The training chunk's compiled program, ready sooner.
+"""The training chunk's compiled programs, ready sooner.
 
-- A first run compiles the chunk in a thread while the main thread makes the first state. The chunk needs only the
-  state's shapes (`jax.eval_shape`), and XLA compiles outside Python's lock, so the two compiles overlap. On one H100,
-  a GSync chunk was compiled 66 s after the trainer was built instead of 92 s (docs/benchmarks.md, "Compilation").
+- A first run compiles the chunk's programs (`learn.stages`) in threads, one each, while the main thread makes the
+  first state. The chunk needs only the state's shapes (`jax.eval_shape`), and XLA compiles outside Python's lock, so
+  the compiles overlap. On one H100, a GSync chunk (then one program) was compiled 66 s after the trainer was built
+  instead of 92 s (docs/benchmarks.md, "Compilation").
 - The compiled chunk is kept on disk beside JAX's persistent cache (`<cache>/chunks/`). A later run of the same code,
   package versions, devices, XLA flags, config and shapes loads it without tracing or lowering it: ready 10.1 s after
   the trainer was built instead of 24.3 s (docs/benchmarks.md, "Compilation"). A later run in the same process
@@ -37,6 +38,7 @@ import jax
 from jax.experimental import serialize_executable
 
 from dexguitar.learn.policy import PolicySpec
+from dexguitar.learn.stages import Chain
 from dexguitar.learn.tracing import fresh_trace
 from dexguitar.world import warp_calls
 
@@ -121,8 +123,9 @@ def directory() -> Path | None:
 
 
 class ChunkBuild:
-    """The compiled chunk of a run, started now and ready at `result()`: loaded from its file, or traced and
-    lowered here (on the calling thread: tracing is Python) and compiled in a thread, then saved. Start it before
+    """The compiled chunk of a run (`stages.Chain`), started now and ready at `result()`: loaded from its file, or
+    traced and lowered here (on the calling thread: tracing is Python) and its programs compiled in threads, then
+    saved. Start it before
     `trainer.init()`, so that the first state's compile runs beside the chunk's.
 
     `state` may be abstract (`jax.ShapeDtypeStruct` with shardings); `data` is the placed `trainer.data`."""
@@ -130,7 +133,8 @@ class ChunkBuild:
     def __init__(self, trainer, where, n: int, state, data, log=lambda msg: None):
         self.start = time.perf_counter()
         self.log = log
-        self._lower = lambda: trainer.make_train_chunk(n, where).lower(state, data)
+        self._stages = lambda: trainer.make_train_chunk(n, where)
+        self._args = (state, data)
         self._devices = list(where.mesh.devices.flat)
         self.key = key(trainer, where, n, (state, data))
         # a program that calls Warp is kept only where its Warp calls can be described again (`warp_calls`)
@@ -150,7 +154,7 @@ class ChunkBuild:
                 # persistent cache holds
                 fresh_trace()
             self.how = "loaded"
-            self._future = _submit(self._pool, self._load, saved["executable"])
+            self._future = _submit(self._pool, self._load, saved)
         else:
             if saved is not None:
                 self.log(f"{self.path} calls Warp's targets otherwise than this process registered them; compiling "
@@ -159,51 +163,56 @@ class ChunkBuild:
             self._future = _submit(self._pool, self._compile, *self._trace())
 
     def _trace(self):
-        """(the chunk lowered here, the Warp calls its trace added: `warp_calls.taken`)."""
+        """(the chunk's programs lowered here, how many times they run per call, the Warp calls their traces added:
+        `warp_calls.taken`)."""
         before = warp_calls.counts()
-        lowered = self._lower()
-        return lowered, warp_calls.taken(before)
+        stages = self._stages()
+        lowered = stages.lower(*self._args)
+        return lowered, stages.repeat, warp_calls.taken(before)
 
     def _read(self) -> dict | None:
         try:
             with open(self.path, "rb") as f:
                 saved = pickle.load(f)
-            if not isinstance(saved, dict) or set(saved) != {"executable", "warp"}:
+            if not isinstance(saved, dict) or set(saved) != {"executables", "repeat", "warp"}:
                 raise ValueError("not a chunk file")
             return saved
         except Exception as err:        # noqa: BLE001 - a stale or broken file: compile instead
             self.log(f"could not load {self.path} ({type(err).__name__}: {err}); compiling the chunk")
             return None
 
-    def _load(self, executable):
+    def _load(self, saved):
         try:
             t = time.perf_counter()
             # onto the run's devices: by default JAX loads onto all of them, and XLA aborts the process where the
             # program was compiled for fewer (a 2-GPU run on a 4-GPU machine)
-            compiled = serialize_executable.deserialize_and_load(*executable, execution_devices=self._devices)
+            programs = [serialize_executable.deserialize_and_load(*executable, execution_devices=self._devices)
+                        for executable in saved["executables"]]
             os.utime(self.path)                     # recently used: kept by `_prune`
             jax.monitoring.record_event_duration_secs(LOAD_EVENT, time.perf_counter() - t)
-            return compiled
+            return Chain(programs, saved["repeat"])
         except Exception as err:        # noqa: BLE001 - a stale or broken file: compile instead (in `result`)
             self.log(f"could not load {self.path} ({type(err).__name__}: {err}); compiling the chunk")
             return None
 
-    def _compile(self, lowered, warp: dict):
-        hits = _HITS[threading.get_ident()]
-        compiled = lowered.compile()
-        if _HITS[threading.get_ident()] > hits and jax.default_backend() in NO_RESAVE:
-            return compiled
+    def _compile(self, lowered: list, repeat: int, warp: dict):
+        with concurrent.futures.ThreadPoolExecutor(len(lowered)) as pool:
+            compiled = list(pool.map(_compile_one, lowered))
+        chain = Chain([c for c, _ in compiled], repeat)
+        if any(hit for _, hit in compiled) and jax.default_backend() in NO_RESAVE:
+            return chain
         if self.path is not None:
             try:
                 self.path.parent.mkdir(parents=True, exist_ok=True)
                 tmp = self.path.with_suffix(f".{os.getpid()}.tmp")
                 with open(tmp, "wb") as f:
-                    pickle.dump({"executable": serialize_executable.serialize(compiled), "warp": warp}, f)
+                    pickle.dump({"executables": [serialize_executable.serialize(c) for c, _ in compiled],
+                                 "repeat": repeat, "warp": warp}, f)
                 os.replace(tmp, self.path)
                 _prune(self.path.parent)
             except Exception as err:    # noqa: BLE001 - a cache that cannot be written only costs the next run time
                 self.log(f"could not keep the compiled chunk in {self.path.parent} ({type(err).__name__}: {err})")
-        return compiled
+        return chain
 
     def result(self):
         """(compiled chunk, seconds since the start, how: "compiled", "loaded" from its file, or "reused" from
@@ -214,6 +223,13 @@ class ChunkBuild:
             compiled, self.how = self._compile(*self._trace()), "compiled"
         _LIVE[self.key] = compiled
         return compiled, time.perf_counter() - self.start, self.how
+
+
+def _compile_one(lowered):
+    """(the program compiled in this thread, whether JAX took it from its persistent cache)."""
+    hits = _HITS[threading.get_ident()]
+    compiled = lowered.compile()
+    return compiled, _HITS[threading.get_ident()] > hits
 
 
 def _env_step_shapes(trainer, where, state):

@@ -1,4 +1,4 @@
-"""The host side of training: a run directory, resume, scanned chunks, progress, metrics and checkpoints. The host
+"""The host side of training: a run directory, resume, chunks of iterations, progress, metrics and checkpoints. The host
 only logs and saves; all learning happens inside the jitted chunk.
 
 A run directory holds `config.json` (how the run was made: compared on --resume), `ckpt/` (the last few whole train

@@ -23,26 +23,4 @@ def fresh_trace() -> None:
     jax.clear_caches()
 
 
-class FreshJit:
-    """A jitted function whose first trace starts from empty caches (`fresh_trace`). `trace` and `lower` always do;
-    a call traces (once) as `jax.jit` does."""
-
-    def __init__(self, jitted):
-        self.jitted = jitted
-        self._called = False
-
-    def trace(self, *args, **kwargs):
-        fresh_trace()
-        return self.jitted.trace(*args, **kwargs)
-
-    def lower(self, *args, **kwargs):
-        return self.trace(*args, **kwargs).lower()
-
-    def __call__(self, *args, **kwargs):
-        if not self._called:
-            fresh_trace()
-            self._called = True
-        return self.jitted(*args, **kwargs)
-
-
-__all__ = ["fresh_trace", "FreshJit"]
+__all__ = ["fresh_trace"]

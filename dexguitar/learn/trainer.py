@@ -1,9 +1,10 @@
-"""One hand at a time: PPO + GAN-like imitation as one jitted training iteration, scanned over many iterations.
+"""One hand at a time: PPO + GAN-like imitation as a jitted training iteration, run many times per host call.
 
 An iteration = rollout (`lax.scan` over the vmapped env and policy) -> discriminator update -> discriminator
-rewards -> per-column GAE with PopArt -> observation normalizer update -> PPO epochs over minibatches. Everything,
-env states included, lives in one `TrainState` pytree, so a checkpoint holds the whole run and a resumed run
-continues with exactly the iteration it would have run next.
+rewards -> per-column GAE with PopArt -> observation normalizer update -> PPO epochs over minibatches, in three
+stages (`act`, `judge`, `learn`), each a program of its own (`learn.stages`), or one program scanning whole
+iterations (`TrainConfig.one_program`). Everything, env states included, lives in one `TrainState` pytree, so a
+checkpoint holds the whole run and a resumed run continues with exactly the iteration it would have run next.
 
 The songs and the reference motion are an argument of the compiled chunk (`Data`), padded to fixed capacities, never
 constants inside it: one compiled program serves every song set of a size. Non-finite numbers are contained where
@@ -20,6 +21,7 @@ import jax
 import jax.numpy as jnp
 import optax
 from flax import struct
+from jax.flatten_util import ravel_pytree
 
 from dexguitar import envs as E
 from dexguitar.errors import UserError
@@ -28,7 +30,7 @@ from dexguitar.learn import networks as N
 from dexguitar.learn import ppo
 from dexguitar.learn.devices import Placement
 from dexguitar.learn.policy import PolicySpec, act_fn, distribution
-from dexguitar.learn.tracing import FreshJit
+from dexguitar.learn.stages import Stages
 from dexguitar.music import timeline as TL
 
 
@@ -56,7 +58,10 @@ class TrainConfig:
     goal_weight: float = -1.0         # per goal column; -1 = the env's (`reward_weights`)
     disc_weight: float = -1.0         # per discriminator column; -1 = the discriminator's (`imitation`)
     iterations: int = 100_000         # ~4e8 samples at 4096 per iteration
-    iterations_per_call: int = 50     # scanned on the device between host updates
+    iterations_per_call: int = 50     # run on the device between host updates
+    one_program: bool = False         # True: a host call's iterations as one program, a `lax.scan` of iterations;
+                                      # False: each iteration's three stages as programs compiled at once
+                                      # (`learn.stages`: a first compile in half the time, the same numbers)
     actor_warmup: int = 0             # iterations in which only the critic and discriminators learn (warm starts)
     log_std_init: float = -2.3        # initial log std of the actions: std 0.1 of a half range (reference §7.1)
     kl_target: float = 0.0            # > 0: the actor's learning rate adapts to hold this KL per minibatch step
@@ -156,6 +161,18 @@ def finite(tree) -> jnp.ndarray:
     parameters and optimizer states) would be as many reductions for XLA to compile."""
     leaves = [jnp.ravel(x) for x in jax.tree.leaves(tree) if jnp.issubdtype(x.dtype, jnp.inexact)]
     return jnp.all(jnp.isfinite(jnp.concatenate(leaves))) if leaves else jnp.bool_(True)
+
+
+def flat_step(optimizer, params, grad, state, ok, scale=1.0):
+    """One step of `optimizer` on a network's parameters raveled into one vector, `grad` raveled alike (its state is
+    made for that vector: `Trainer.optimizer_states`), kept as it was where `ok` is false. The norm clip, Adam and
+    the skip of a non-finite step are then a few operations on one array each instead of as many per parameter
+    array (1,856 fewer jaxpr equations in the chunk: docs/benchmarks.md, "The training program's size"). `scale`
+    multiplies the step (the adaptive actor rate)."""
+    p, unravel = ravel_pytree(params)
+    updates, new_state = optimizer.update(grad, state, p)
+    new = jnp.where(ok, p + scale * updates, p)
+    return unravel(new), jax.tree.map(lambda n, o: jnp.where(ok, n, o), new_state, state)
 
 
 class Trainer:
@@ -259,14 +276,19 @@ class Trainer:
             params["frozen"] = frozen
         return params, obs_norm
 
+    def optimizer_states(self, params: dict) -> dict:
+        """The optimizers' first states for `params` (each network's parameters as one vector: `flat_step`)."""
+        opt = {k: self.optimizers[k].init(ravel_pytree(params[k])[0]) for k in self.optimizers if k in params}
+        if self.config.kl_target:
+            opt["lr"] = jnp.float32(self.config.actor_lr)
+        return opt
+
     def initial_state(self, key, inputs: dict, nets: tuple[dict, dict] | None = None) -> TrainState:
         """The first state from `key`; `nets`: `initial_params(key, inputs)`, made here if not given."""
         cfg = self.config
         params, obs_norm = self.initial_params(key, inputs) if nets is None else nets
         k_env, k_age, key = jax.random.split(key, 6)[3:]
-        opt = {k: self.optimizers[k].init(params[k]) for k in self.optimizers}
-        if cfg.kl_target:
-            opt["lr"] = jnp.float32(cfg.actor_lr)
+        opt = self.optimizer_states(params)
         env_state = self.reset_envs(self.env.bind(inputs["songs"]), jax.random.split(k_env, cfg.num_envs))
         # Envs start at random ages, so their time-outs spread over the episode instead of all of them restarting
         # from the home pose together every `episode_frames` steps.
@@ -365,10 +387,9 @@ class Trainer:
         def step(carry, k):
             p, o = carry
             (_, log), grads = jax.value_and_grad(loss_fn, has_aux=True)(p, k)
-            updates, o2 = self.optimizers["disc"].update(grads, o, p)
-            ok = finite(grads)
-            p, o = jax.tree.map(lambda new, old: jnp.where(ok, new, old), (optax.apply_updates(p, updates), o2),
-                                (p, o))
+            grad = ravel_pytree(grads)[0]
+            ok = finite(grad)
+            p, o = flat_step(self.optimizers["disc"], p, grad, o, ok)
             return (p, o), dict(log, skipped=1.0 - ok.astype(jnp.float32))
         (params, opt), log = jax.lax.scan(step, (ts.params["disc"], ts.opt["disc"]),
                                           jax.random.split(k_steps, cfg.disc_steps))
@@ -419,22 +440,22 @@ class Trainer:
                 if split is not None:
                     mb = jax.lax.with_sharding_constraint(mb, split)
                 (_, log), grads = jax.value_and_grad(loss_fn, has_aux=True)(params, mb)
-                new_params, new_opt = dict(params), dict(opt)
-                for name in ("policy", "critic"):
-                    updates, new_opt[name] = self.optimizers[name].update(grads[name], opt[name], params[name])
-                    if name == "policy" and cfg.kl_target:
-                        # the KL of this minibatch before its step sets the step's rate. In a warm-up the step is 0
-                        # and the rate stays as it is: the KL of a still actor is 0, and adapting to it would climb
-                        # to the upper bound and throw the first real step far (a KL of 52,000).
-                        warm = ts.iteration < cfg.actor_warmup
-                        new_opt["lr"] = jnp.where(warm, opt["lr"], adapt_lr(opt["lr"], log["kl"], cfg.kl_target))
-                        rate = jnp.where(warm, 0.0, new_opt["lr"])
-                        updates = jax.tree.map(lambda u: rate * u, updates)
-                        log = dict(log, actor_lr=new_opt["lr"])
-                    new_params[name] = optax.apply_updates(params[name], updates)
+                grads = {name: ravel_pytree(g)[0] for name, g in grads.items()}
                 ok = finite(grads)
-                carry = jax.tree.map(lambda new, old: jnp.where(ok, new, old), (new_params, new_opt),
-                                     (params, opt))
+                new_params, new_opt, rate = dict(params), dict(opt), 1.0
+                if cfg.kl_target:
+                    # the KL of this minibatch before its step sets the step's rate. In a warm-up the step is 0 and
+                    # the rate stays as it is: the KL of a still actor is 0, and adapting to it would climb to the
+                    # upper bound and throw the first real step far (a KL of 52,000).
+                    warm = ts.iteration < cfg.actor_warmup
+                    lr = jnp.where(warm, opt["lr"], adapt_lr(opt["lr"], log["kl"], cfg.kl_target))
+                    new_opt["lr"] = jnp.where(ok, lr, opt["lr"])
+                    rate = jnp.where(warm, 0.0, lr)
+                    log = dict(log, actor_lr=lr)
+                for name in ("policy", "critic"):
+                    new_params[name], new_opt[name] = flat_step(self.optimizers[name], params[name], grads[name],
+                                                                opt[name], ok, rate if name == "policy" else 1.0)
+                carry = (new_params, new_opt)
                 return carry, dict(log, skipped=1.0 - ok.astype(jnp.float32))
             return jax.lax.scan(minibatch, carry, perm)
 
@@ -447,19 +468,26 @@ class Trainer:
     # ------------------------------------------------------------------------------------------ iteration
     def iteration(self, ts: TrainState, data: Data, placement: Placement | None = None):
         """One iteration; over the devices of `placement` (default: one), which step their own envs and split each
-        PPO minibatch."""
-        cfg = self.config
-        env = self.env.bind(data.songs)
-        split = placement.split if placement is not None and placement.n > 1 else None
-        k_roll, k_disc, k_ppo, key = jax.random.split(ts.key, 4)
-        env_state, traj = self.rollout(env, ts, k_roll, placement)
+        PPO minibatch: the rollout (`act`), the rewards and advantages (`judge`), PPO (`learn`)."""
+        return self.learn(*self.judge(*self.act(ts, data, placement), data), placement)
 
+    def act(self, ts: TrainState, data: Data, placement: Placement | None = None):
+        """The rollout: (state with the envs moved on, trajectory (steps, envs, ...), the later stages' keys)."""
+        k_roll, k_disc, k_ppo, key = jax.random.split(ts.key, 4)
+        env_state, traj = self.rollout(self.env.bind(data.songs), ts, k_roll, placement)
+        return ts.replace(env=env_state, key=key), traj, {"disc": k_disc, "ppo": k_ppo}
+
+    def judge(self, ts: TrainState, traj, keys, data: Data):
+        """The discriminators' update and rewards, per-column GAE with PopArt, the observation normalizer: (state,
+        the PPO batch (steps, envs, ...), the keys, the rollout's metrics)."""
+        cfg = self.config
+        env_state = ts.env
         disc_params, disc_opt, disc_norm, buffers, disc_log, disc_rewards = self.update_discriminators(
-            ts, traj, data, k_disc)
+            ts, traj, data, keys["disc"])
         rewards = traj["reward"]
         if disc_rewards:
             d = jnp.stack(disc_rewards, -1)
-            d = jnp.where(traj["terminated"][..., None], env.config.terminate_reward, d)
+            d = jnp.where(traj["terminated"][..., None], self.env.config.terminate_reward, d)
             rewards = jnp.concatenate([rewards, d], -1)
 
         # values (normalized outputs -> returns scale) at every step and after the last one
@@ -477,14 +505,10 @@ class Trainer:
         frames, _ = self.layout.split(traj["obs"])
         obs_norm = N.normalizer_update(ts.obs_norm, frames)
 
-        flat = lambda x: x.reshape((-1,) + x.shape[2:])  # noqa: E731
-        batch = {"obs": flat(traj["obs"]), "privileged": flat(traj["privileged"]), "action": flat(traj["action"]),
-                 "logp": flat(traj["logp"]), "adv": flat(weighted),
-                 "target": flat(ppo.popart_normalize(popart, returns))}
+        batch = {"obs": traj["obs"], "privileged": traj["privileged"], "action": traj["action"],
+                 "logp": traj["logp"], "adv": weighted, "target": ppo.popart_normalize(popart, returns)}
         if cfg.teacher_weight:
-            batch["teacher"] = flat(traj["teacher"])
-        ts_mid = ts.replace(obs_norm=obs_norm, params=dict(ts.params, critic=critic))
-        params, opt, ppo_log = self.ppo_update(ts_mid, batch, k_ppo, split)
+            batch["teacher"] = traj["teacher"]
 
         metrics = {"reward/" + c: jnp.mean(rewards[..., i]) for i, c in enumerate(self.columns)}
         for h in self.env.roles + (("both",) if len(self.env.roles) == 2 else ()):
@@ -495,28 +519,41 @@ class Trainer:
         metrics["episodes"] = jnp.sum(traj["done"].astype(jnp.float32))
         metrics["terminations"] = jnp.sum(traj["terminated"].astype(jnp.float32))
         metrics["nonfinite/env_steps"] = jnp.sum(traj["nonfinite"].astype(jnp.float32))
-        metrics.update(ppo_log)
         metrics.update(disc_log)
-        new = ts.replace(
-            params=dict(ts.params, policy=params["policy"], critic=params["critic"], disc=disc_params),
-            opt=dict(opt, disc=disc_opt),
-            obs_norm=obs_norm, disc_norm=disc_norm, popart=popart, buffers=buffers, env=env_state, key=key,
-            iteration=ts.iteration + 1)
+        ts = ts.replace(params=dict(ts.params, critic=critic, disc=disc_params), opt=dict(ts.opt, disc=disc_opt),
+                        obs_norm=obs_norm, disc_norm=disc_norm, popart=popart, buffers=buffers)
+        return ts, batch, keys, metrics
+
+    def learn(self, ts: TrainState, batch, keys, metrics, placement: Placement | None = None):
+        """The PPO epochs over the batch's steps and envs as one axis: (the next iteration's state, the iteration's
+        metrics)."""
+        split = placement.split if placement is not None and placement.n > 1 else None
+        batch = jax.tree.map(lambda x: x.reshape((-1,) + x.shape[2:]), batch)
+        params, opt, ppo_log = self.ppo_update(ts, batch, keys["ppo"], split)
+        new = ts.replace(params=dict(ts.params, policy=params["policy"], critic=params["critic"]),
+                         opt=dict(opt, disc=ts.opt["disc"]), iteration=ts.iteration + 1)
+        metrics = dict(metrics, **ppo_log)
         metrics["nonfinite/state"] = 1.0 - finite((new.params, new.opt, new.obs_norm, new.popart)).astype(
             jnp.float32)
         return new, metrics
 
-    def make_train_chunk(self, n: int, placement: Placement | None = None):
-        """A jitted function (state, data) -> (state, metrics) running n iterations in one `lax.scan`; metrics
-        summed over the chunk (sums of F1 and note counts, so the host can form the mean F1 per note). The state
-        is split over the devices of `placement` (default: every device) and comes back placed as it went in, so
-        every call runs the one compiled program. Its first trace starts from empty caches (`tracing`), so that
-        program is the same for every song of a capacity, whatever the process traced before."""
+    def make_train_chunk(self, n: int, placement: Placement | None = None) -> Stages:
+        """The programs of n iterations (`learn.stages`: (state, data) -> (state, metrics summed over them)): the
+        stages of an iteration each a program of its own, compiled at once, or with `TrainConfig.one_program` one
+        program scanning the n iterations. The state is split over the devices of `placement` (default: every
+        device) and comes back placed as it went in, a rollout's arrays split along their envs between the stages, so
+        every call runs the same compiled programs."""
         placement = placement or Placement()
-        state = placement.shardings(self.state_shapes)
+        state, data = placement.shardings(self.state_shapes), placement.replicated(self.data)
+        steps, whole = placement.steps, placement.whole
 
-        def chunk(ts, data):
-            ts, metrics = jax.lax.scan(lambda s, _: self.iteration(s, data, placement), ts, None, length=n)
-            return ts, jax.tree.map(lambda x: jnp.sum(x) if x.ndim else x, metrics)
-        return FreshJit(jax.jit(chunk, donate_argnums=0, in_shardings=(state, placement.replicated(self.data)),
-                                out_shardings=(state, placement.whole)))
+        def stage(fn, arg, out):
+            return jax.jit(fn, donate_argnums=0, in_shardings=(arg, data), out_shardings=out)
+        if self.config.one_program:
+            return Stages([stage(lambda ts, d: jax.lax.scan(lambda s, _: self.iteration(s, d, placement), ts, None,
+                                                            length=n), state, (state, whole))], 1)
+        return Stages([
+            stage(lambda ts, d: self.act(ts, d, placement), state, (state, steps, whole)),
+            stage(lambda x, d: self.judge(*x, d), (state, steps, whole), (state, steps, whole, whole)),
+            stage(lambda x, d: self.learn(*x, placement), (state, steps, whole, whole), (state, whole)),
+        ], n)
