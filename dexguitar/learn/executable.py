@@ -2,7 +2,7 @@
 
 - A first run compiles the chunk's programs (`learn.stages`) in threads, one each, while the main thread makes the
   first state. The chunk needs only the state's shapes (`jax.eval_shape`), and XLA compiles outside Python's lock, so
-  the compiles overlap. On one H100, a GSync chunk (then one program) was compiled 66 s after the trainer was built
+  the compiles overlap. On one H100, a GSync chunk as one program was compiled 66 s after the trainer was built
   instead of 92 s (docs/benchmarks.md, "Compilation").
 - The compiled chunk is kept on disk beside JAX's persistent cache (`<cache>/chunks/`). A later run of the same code,
   package versions, devices, XLA flags, config and shapes loads it without tracing or lowering it: ready 10.1 s after
@@ -125,8 +125,7 @@ def directory() -> Path | None:
 class ChunkBuild:
     """The compiled chunk of a run (`stages.Chain`), started now and ready at `result()`: loaded from its file, or
     traced and lowered here (on the calling thread: tracing is Python) and its programs compiled in threads, then
-    saved. Start it before
-    `trainer.init()`, so that the first state's compile runs beside the chunk's.
+    saved. Start it before `trainer.init()`, so that the first state's compile runs beside the chunk's.
 
     `state` may be abstract (`jax.ShapeDtypeStruct` with shardings); `data` is the placed `trainer.data`."""
 

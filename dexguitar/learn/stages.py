@@ -1,15 +1,15 @@
 """The training chunk as a chain of programs, each compiled on its own.
 
-An iteration is three stages (`Trainer.act`, `judge`, `learn`), and the chunk runs `repeat` iterations. As one
-`lax.scan` the chunk was one program, and XLA's compile of a program is one thread: on an H200 under Warp the left
-hand's chunk took 21-23 s to compile. Its stages as three programs compiled at once, in threads, were all compiled
-9.8 s after their trace (docs/benchmarks.md, "The training program in three"). The price is three calls per
+An iteration is three stages (`Trainer.act`, `judge`, `learn`), and the chunk runs `repeat` iterations. XLA compiles
+a program on one thread: the left hand's chunk as one program, a `lax.scan` of iterations (`TrainConfig.one_program`),
+compiles in 21-23 s on an H200 under Warp; its stages as three programs compiled at once, in threads, are all
+compiled 9.8 s after their trace (docs/benchmarks.md, "The training program in three"). The price is three calls per
 iteration instead of one per chunk, and the stages' outputs (a rollout's trajectory, the PPO batch) kept in device
-memory between them, as the one program kept them too.
+memory between them, as one program keeps them too.
 
 The convention: the first program takes (state, data), each later one (what the one before returned, data), and
 the last returns (state, metrics); the next iteration starts from that state. The metrics of the iterations are
-summed on the host, as the scanned chunk summed them.
+summed on the host, as one program sums them on the device.
 """
 from __future__ import annotations
 
