@@ -100,33 +100,6 @@ def test_normalizer_merges_batches_exactly():
     assert np.all(np.abs(np.asarray(stats["var"]) - 4.0) < 0.5) and all_.shape == (1001, 4)
 
 
-def test_a_flat_step_is_the_optimizer_on_every_array_and_a_nonfinite_one_changes_nothing():
-    from jax.flatten_util import ravel_pytree
-
-    from dexguitar.learn.trainer import flat_step
-    params = {"a": {"kernel": jnp.ones((2, 3))}, "b": jnp.array([0.5, -1.0])}
-    grads = [{"a": {"kernel": jnp.full((2, 3), 3.0)}, "b": jnp.array([-4.0, 0.0])},     # norm sqrt(70): clipped
-             {"a": {"kernel": jnp.full((2, 3), -0.1)}, "b": jnp.array([0.2, 0.3])}]     # norm 0.39: not clipped
-    opt = optax.chain(optax.clip_by_global_norm(1.0), optax.adam(0.1))
-    state = opt.init(ravel_pytree(params)[0])
-    p1, state = flat_step(opt, params, ravel_pytree(grads[0])[0], state, jnp.bool_(True))
-    # Adam's first step is the rate times the gradient's sign, whatever the clip's scale; a zero gradient stays
-    np.testing.assert_allclose(p1["a"]["kernel"], np.full((2, 3), 0.9), rtol=1e-5)
-    np.testing.assert_allclose(p1["b"], [0.6, -1.0], rtol=1e-5)
-    p2, state = flat_step(opt, p1, ravel_pytree(grads[1])[0], state, jnp.bool_(True), scale=0.5)
-    # the same optimizer on the arrays as they are, its second step halved
-    tree_state = opt.init(params)
-    u, tree_state = opt.update(grads[0], tree_state, params)
-    u, _ = opt.update(grads[1], tree_state, optax.apply_updates(params, u))
-    want = jax.tree.map(lambda p, d: p + 0.5 * d, p1, u)
-    jax.tree.map(lambda a, b: np.testing.assert_allclose(a, b, rtol=1e-6), p2, want)
-    # a step skipped: the parameters and every part of the state as they were, Adam's count too
-    bad = ravel_pytree(grads[1])[0].at[0].set(jnp.nan)
-    p3, state3 = flat_step(opt, p2, bad, state, jnp.bool_(False))
-    assert jax.tree.all(jax.tree.map(np.array_equal, (p3, state3), (p2, state)))
-    assert int(state3[1][0].count) == 2
-
-
 def test_gru_is_flax_gru_cell_over_the_frames():
     """networks.GRU joins the cell's six gate kernels into two products: the same parameters (names, shapes and initial
     values) as `nn.GRUCell` and the same output as the cell stepped over the frames from a zero state."""

@@ -21,7 +21,6 @@ import jax
 import jax.numpy as jnp
 import optax
 from flax import struct
-from jax.flatten_util import ravel_pytree
 
 from dexguitar import envs as E
 from dexguitar.errors import UserError
@@ -163,18 +162,6 @@ def finite(tree) -> jnp.ndarray:
     return jnp.all(jnp.isfinite(jnp.concatenate(leaves))) if leaves else jnp.bool_(True)
 
 
-def flat_step(optimizer, params, grad, state, ok, scale=1.0):
-    """One step of `optimizer` on a network's parameters raveled into one vector, `grad` raveled alike (its state is
-    made for that vector: `Trainer.optimizer_states`), kept as it was where `ok` is false. The norm clip, Adam and
-    the skip of a non-finite step are then a few operations on one array each instead of as many per parameter
-    array (1,856 fewer jaxpr equations in the chunk: docs/benchmarks.md, "The training program's size"). `scale`
-    multiplies the step (the adaptive actor rate)."""
-    p, unravel = ravel_pytree(params)
-    updates, new_state = optimizer.update(grad, state, p)
-    new = jnp.where(ok, p + scale * updates, p)
-    return unravel(new), jax.tree.map(lambda n, o: jnp.where(ok, n, o), new_state, state)
-
-
 class Trainer:
     """Builds the networks and the jitted iteration for one hand over a song batch and reference motions."""
 
@@ -277,8 +264,8 @@ class Trainer:
         return params, obs_norm
 
     def optimizer_states(self, params: dict) -> dict:
-        """The optimizers' first states for `params` (each network's parameters as one vector: `flat_step`)."""
-        opt = {k: self.optimizers[k].init(ravel_pytree(params[k])[0]) for k in self.optimizers if k in params}
+        """The optimizers' first states for `params` (and the adaptive actor rate's, with a KL target)."""
+        opt = {k: self.optimizers[k].init(params[k]) for k in self.optimizers if k in params}
         if self.config.kl_target:
             opt["lr"] = jnp.float32(self.config.actor_lr)
         return opt
@@ -387,9 +374,10 @@ class Trainer:
         def step(carry, k):
             p, o = carry
             (_, log), grads = jax.value_and_grad(loss_fn, has_aux=True)(p, k)
-            grad = ravel_pytree(grads)[0]
-            ok = finite(grad)
-            p, o = flat_step(self.optimizers["disc"], p, grad, o, ok)
+            updates, o2 = self.optimizers["disc"].update(grads, o, p)
+            ok = finite(grads)
+            p, o = jax.tree.map(lambda new, old: jnp.where(ok, new, old), (optax.apply_updates(p, updates), o2),
+                                (p, o))
             return (p, o), dict(log, skipped=1.0 - ok.astype(jnp.float32))
         (params, opt), log = jax.lax.scan(step, (ts.params["disc"], ts.opt["disc"]),
                                           jax.random.split(k_steps, cfg.disc_steps))
@@ -440,22 +428,22 @@ class Trainer:
                 if split is not None:
                     mb = jax.lax.with_sharding_constraint(mb, split)
                 (_, log), grads = jax.value_and_grad(loss_fn, has_aux=True)(params, mb)
-                grads = {name: ravel_pytree(g)[0] for name, g in grads.items()}
-                ok = finite(grads)
-                new_params, new_opt, rate = dict(params), dict(opt), 1.0
-                if cfg.kl_target:
-                    # the KL of this minibatch before its step sets the step's rate. In a warm-up the step is 0 and
-                    # the rate stays as it is: the KL of a still actor is 0, and adapting to it would climb to the
-                    # upper bound and throw the first real step far (a KL of 52,000).
-                    warm = ts.iteration < cfg.actor_warmup
-                    lr = jnp.where(warm, opt["lr"], adapt_lr(opt["lr"], log["kl"], cfg.kl_target))
-                    new_opt["lr"] = jnp.where(ok, lr, opt["lr"])
-                    rate = jnp.where(warm, 0.0, lr)
-                    log = dict(log, actor_lr=lr)
+                new_params, new_opt = dict(params), dict(opt)
                 for name in ("policy", "critic"):
-                    new_params[name], new_opt[name] = flat_step(self.optimizers[name], params[name], grads[name],
-                                                                opt[name], ok, rate if name == "policy" else 1.0)
-                carry = (new_params, new_opt)
+                    updates, new_opt[name] = self.optimizers[name].update(grads[name], opt[name], params[name])
+                    if name == "policy" and cfg.kl_target:
+                        # the KL of this minibatch before its step sets the step's rate. In a warm-up the step is 0
+                        # and the rate stays as it is: the KL of a still actor is 0, and adapting to it would climb
+                        # to the upper bound and throw the first real step far (a KL of 52,000).
+                        warm = ts.iteration < cfg.actor_warmup
+                        new_opt["lr"] = jnp.where(warm, opt["lr"], adapt_lr(opt["lr"], log["kl"], cfg.kl_target))
+                        rate = jnp.where(warm, 0.0, new_opt["lr"])
+                        updates = jax.tree.map(lambda u: rate * u, updates)
+                        log = dict(log, actor_lr=new_opt["lr"])
+                    new_params[name] = optax.apply_updates(params[name], updates)
+                ok = finite(grads)
+                carry = jax.tree.map(lambda new, old: jnp.where(ok, new, old), (new_params, new_opt),
+                                     (params, opt))
                 return carry, dict(log, skipped=1.0 - ok.astype(jnp.float32))
             return jax.lax.scan(minibatch, carry, perm)
 
